@@ -1,0 +1,23 @@
+#pragma once
+/// The parameter file shared by the node and the offline runner (config/hair_sim.yaml).
+#include <string>
+
+#include "hair_sim/core/model/PhysicsParameters.hpp"
+
+namespace hair_sim {
+
+struct SimConfig {
+  std::string world_frame = "world";
+  std::string head_frame = "head";
+  double publish_rate = 30.0;  ///< Hz
+  std::string hairstyle_file;  ///< absolute, resolved against the config file's folder
+  PhysicsParameters physics;
+};
+
+/// Loads and validates; throws std::invalid_argument naming the file, key, line and value.
+SimConfig loadSimConfig(const std::string& path);
+
+/// `relative` resolved against the folder of `file` (unchanged when already absolute).
+std::string resolveRelativeTo(const std::string& file, const std::string& relative);
+
+}  // namespace hair_sim

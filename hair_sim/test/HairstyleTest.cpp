@@ -1,0 +1,125 @@
+/// Hairstyle model, YAML load/save and their error messages.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <regex>
+
+#include "TestUtil.hpp"
+#include "hair_sim/core/model/HairstyleIO.hpp"
+#include "hair_sim/core/model/SimConfig.hpp"
+
+namespace hair_sim {
+namespace {
+
+const char* kGood =
+    "format_version: 1\n"
+    "scalp: {center: [0, 0, 0], rpy: [0, 0, 0], radii: [0.1, 0.1, 0.1]}\n"
+    "strips:\n"
+    "  - name: a\n"
+    "    columns: 2\n"
+    "    rows: 4\n"
+    "    hair_length: 0.15\n"
+    "    width: 0.02\n"
+    "    thickness_margin: 0.004\n"
+    "    color: [0.3, 0.2, 0.1, 1.0]\n"
+    "    points: [[0, -0.01, 0.0994987437], [0, 0.01, 0.0994987437], [0, -0.01, 0.15], [0, 0.01, 0.15],\n"
+    "             [0, -0.01, 0.2], [0, 0.01, 0.2], [0, -0.01, 0.25], [0, 0.01, 0.25]]\n";
+
+TEST(HairstyleTest, LoadsAndRoundTripsBitIdentically) {
+  const Hairstyle a = loadHairstyle(test::writeTemp("good.yaml", kGood));
+  ASSERT_EQ(a.strips.size(), 1u);
+  EXPECT_EQ(a.strips[0].columns, 2);
+  EXPECT_EQ(a.strips[0].rows, 4);
+  EXPECT_DOUBLE_EQ(a.strips[0].hair_length, 0.15);
+  EXPECT_NEAR(a.strips[0].columnLength(0), 0.1505012563, 1e-9);
+  const std::string path = ::testing::TempDir() + "hair_sim_saved.yaml";
+  saveHairstyle(a, path);
+  const Hairstyle b = loadHairstyle(path);
+  ASSERT_EQ(b.strips[0].points.size(), a.strips[0].points.size());
+  EXPECT_EQ(0, std::memcmp(a.strips[0].points.data(), b.strips[0].points.data(), 8 * sizeof(Vec3)));
+  EXPECT_EQ(a.scalp.radii(), b.scalp.radii());
+  EXPECT_FLOAT_EQ(b.strips[0].color.r, 0.3f);
+}
+
+struct BadCase {
+  const char* from;
+  const char* to;
+  const char* expect_key;
+  const char* expect_value;
+};
+
+TEST(HairstyleTest, EveryMalformedKeyIsNamedWithItsValue) {
+  const BadCase cases[] = {
+      {"rows: 4", "rows: 3", "strips[0].rows", "3"},
+      {"columns: 2", "columns: 1", "strips[0].columns", "1"},
+      {"columns: 2", "columns: two", "strips[0].columns", "two"},
+      {"hair_length: 0.15", "hair_length: -0.15", "strips[0].hair_length", "-0.15"},
+      {"width: 0.02", "width: .inf", "strips[0].width", ".inf"},
+      {"thickness_margin: 0.004", "thickness_margin: 5", "strips[0].thickness_margin", "5"},
+      {"color: [0.3, 0.2, 0.1, 1.0]", "color: [0.3, 2.0, 0.1]", "strips[0].color[1]", "2"},
+      {"radii: [0.1, 0.1, 0.1]", "radii: [0.1, 0, 0.1]", "scalp.radii", "0"},
+      {"radii: [0.1, 0.1, 0.1]", "radii: [0.1, 0.1]", "scalp.radii", "[0.1, 0.1]"},
+      {"[0, 0.01, 0.25]]", "[0, 0.01]]", "strips[0].points[7]", "[0, 0.01]"},
+      {"[0, 0.01, 0.25]]", "[0, 0.01, nan]]", "strips[0].points[7][2]", "nan"},
+      {"[0, 0.01, 0.25]]", "[0, 0.01, 0.2]]", "strips[0].points[7]", "segment length"},
+      {", [0, 0.01, 0.25]]", "]", "strips[0].points", "7 points"},
+      {"[[0, -0.01, 0.0994987437]", "[[0, -0.01, 0.2]", "strips[0].points[0]", "off the scalp"},
+      {"    width: 0.02\n", "    width: 0.02\n    lenght: 3\n", "strips[0].lenght", "unknown key"},
+      {"format_version: 1", "format_version: 2", "format_version", "2"},
+  };
+  for (const BadCase& c : cases) {
+    std::string text = kGood;
+    const std::size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, std::strlen(c.from), c.to);
+    const std::string path = test::writeTemp("bad.yaml", text);
+    const std::string m = test::errorOf([&] { loadHairstyle(path); });
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+    EXPECT_NE(m.find(c.expect_key), std::string::npos) << "case " << c.to << ": " << m;
+    EXPECT_NE(m.find(c.expect_value), std::string::npos) << "case " << c.to << ": " << m;
+  }
+}
+
+TEST(HairstyleTest, EmptyStripListIsRejected) {
+  const std::string path = test::writeTemp(
+      "empty.yaml",
+      "format_version: 1\nscalp: {center: [0, 0, 0], rpy: [0, 0, 0], radii: [0.1, 0.1, 0.1]}\nstrips: []\n");
+  const std::string m = test::errorOf([&] { loadHairstyle(path); });
+  EXPECT_NE(m.find("strips"), std::string::npos) << m;
+  EXPECT_NE(m.find("at least 1"), std::string::npos) << m;
+}
+
+TEST(HairstyleTest, ShippedDefaultHairstyleIsValidAndPaperSized) {
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  const Hairstyle h = loadHairstyle(config.hairstyle_file);
+  EXPECT_GE(h.strips.size(), 80u);
+  EXPECT_LE(h.strips.size(), 120u);
+  for (const Strip& s : h.strips) EXPECT_EQ(s.pointCount(), 10);  // the paper's 10 control points
+}
+
+TEST(HairstyleTest, ConfigErrorsNameKeyAndValue) {
+  const std::string base = test::repoPath("config/hair_sim.yaml");
+  std::ifstream in(base);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const BadCase cases[] = {
+      {"hinge_stiffness: 4.0e-4", "hinge_stiffness: -1", "physics.hinge_stiffness", "-1"},
+      {"substep: 0.004166666666666667", "substep: 0", "physics.substep", "0"},
+      {"publish_rate: 30.0", "publish_rate: fast", "publish_rate", "fast"},
+      {"world_frame: world", "world_frame: ''", "world_frame", "valid tf frame"},
+      {"air_drag: 0.02", "air_drag: 0.02\n  air_dragg: 1", "physics.air_dragg", "unknown key"},
+      {"gravity: [0.0, 0.0, -9.81]", "gravity: [0.0, -9.81]", "physics.gravity", "[0.0, -9.81]"},
+  };
+  for (const BadCase& c : cases) {
+    std::string text = good;
+    const std::size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, std::strlen(c.from), c.to);
+    const std::string path = test::writeTemp("config.yaml", text);
+    const std::string m = test::errorOf([&] { loadSimConfig(path); });
+    EXPECT_NE(m.find(c.expect_key), std::string::npos) << m;
+    EXPECT_NE(m.find(c.expect_value), std::string::npos) << m;
+  }
+}
+
+}  // namespace
+}  // namespace hair_sim

@@ -1,0 +1,127 @@
+/// The offline runner in-process and as the hair_sim_offline command.
+#include "hair_sim/tools/OfflineRunner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "TestUtil.hpp"
+#include "hair_sim/core/model/HairstyleIO.hpp"
+
+namespace hair_sim {
+namespace {
+
+using Frames = std::map<long, std::vector<Vec3>>;  // key: frame time in microseconds
+
+Frames runAt(double rate, double duration = 1.0) {
+  SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  Scenario scenario = Scenario::load(test::repoPath("config/scenarios/head_shake.yaml"));
+  scenario.output_rate = rate;
+  scenario.duration = duration;
+  OfflineRunner runner(config, loadHairstyle(config.hairstyle_file), scenario);
+  Frames frames;
+  runner.run([&](const OutputFrame& f) { frames[std::lround(f.t * 1e6)] = *f.points_world; });
+  return frames;
+}
+
+TEST(OfflineRunnerTest, OutputRateDoesNotChangeTheResults) {
+  const Frames a = runAt(30.0), b = runAt(60.0);
+  EXPECT_EQ(a.size(), 31u);
+  EXPECT_EQ(b.size(), 61u);
+  int shared = 0;
+  for (const auto& [t, points] : a) {
+    const auto it = b.find(t);
+    ASSERT_NE(it, b.end()) << t;
+    ASSERT_EQ(points.size(), it->second.size());
+    EXPECT_EQ(0, std::memcmp(points.data(), it->second.data(), points.size() * sizeof(Vec3))) << "t = " << t;
+    ++shared;
+  }
+  EXPECT_EQ(shared, 31);
+  // The head shake really moved the hair (the comparison above is not between still frames).
+  EXPECT_GT((a.rbegin()->second.back() - a.begin()->second.back()).norm(), 1e-3);
+}
+
+TEST(OfflineRunnerTest, TwoRunsAreBitIdentical) {
+  const Frames a = runAt(30.0), b = runAt(30.0);
+  for (const auto& [t, points] : a)
+    EXPECT_EQ(0, std::memcmp(points.data(), b.at(t).data(), points.size() * sizeof(Vec3))) << t;
+}
+
+struct Command {
+  int status;
+  std::string out;
+};
+
+Command shell(const std::string& cmd) {
+  Command r{0, ""};
+  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
+  char buf[4096];
+  std::size_t n;
+  while ((n = fread(buf, 1, sizeof(buf), p)) > 0) r.out.append(buf, n);
+  const int st = pclose(p);
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+const std::string kBin = HAIR_SIM_OFFLINE_BIN;
+
+TEST(OfflineRunnerTest, CommandWritesCsvPosesAndJsonSummary) {
+  const std::string dir = ::testing::TempDir();
+  const std::string scenario = test::writeTemp(
+      "short.yaml",
+      "duration: 0.5\noutput_rate: 20\nhead:\n  - {t: 0, position: [0, 0, 1.6], rpy: [0, 0, 0]}\n"
+      "  - {t: 0.5, position: [0, 0.1, 1.6], rpy: [0, 0, 0.3]}\n");
+  const Command c = shell(kBin + " --config " + test::repoPath("config/hair_sim.yaml") + " --scenario " +
+                          scenario + " --out " + dir + "pts.csv --poses-out " + dir + "poses.csv");
+  ASSERT_EQ(c.status, 0) << c.out;
+  const std::string last = c.out.substr(c.out.rfind('{'));
+  for (const char* key : {"\"steps\": 120", "\"control_points\"", "\"sim_seconds\": 0.5", "\"wall_seconds\"",
+                          "\"ns_per_control_point_update\""})
+    EXPECT_NE(last.find(key), std::string::npos) << key << " in " << last;
+  std::ifstream pts(dir + "pts.csv"), poses(dir + "poses.csv");
+  std::string header;
+  std::getline(pts, header);
+  EXPECT_EQ(header, "t,strip,column,row,x,y,z");
+  long lines = 0;
+  std::string line, first;
+  while (std::getline(pts, line)) {
+    if (lines == 0) first = line;
+    ++lines;
+  }
+  const int points = loadHairstyle(test::repoPath("config/hairstyles/default.yaml")).controlPointCount();
+  EXPECT_EQ(lines, 11L * points);  // frames at 0, 0.05, ..., 0.5
+  EXPECT_EQ(first.substr(0, 15), "0.000000,0,0,0,");
+  std::getline(poses, header);
+  EXPECT_EQ(header, "t,x,y,z,qx,qy,qz,qw");
+  std::vector<std::string> pose_lines;
+  while (std::getline(poses, line)) pose_lines.push_back(line);
+  ASSERT_EQ(pose_lines.size(), 11u);
+  EXPECT_EQ(pose_lines.back().substr(0, 22), "0.500000,0,0.1,1.6,0,0");
+}
+
+TEST(OfflineRunnerTest, CommandReportsBadInputAndUsage) {
+  Command c = shell(kBin + " --help");
+  EXPECT_EQ(c.status, 0);
+  EXPECT_NE(c.out.find("--scenario"), std::string::npos);
+  c = shell(kBin + " --config x.yaml");
+  EXPECT_EQ(c.status, 2);
+  EXPECT_NE(c.out.find("--scenario is required"), std::string::npos) << c.out;
+  c = shell(kBin + " --bogus");
+  EXPECT_EQ(c.status, 2);
+  const std::string bad = test::writeTemp("bad_scenario.yaml", "duration: soon\nhead:\n  - {t: 0}\n");
+  c = shell(kBin + " --config " + test::repoPath("config/hair_sim.yaml") + " --scenario " + bad +
+            " --out /dev/null");
+  EXPECT_EQ(c.status, 1);
+  EXPECT_NE(c.out.find(bad + ": duration (line 1)"), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find("'soon'"), std::string::npos) << c.out;
+  c = shell(kBin + " --config /nonexistent.yaml --scenario " + bad + " --out /dev/null");
+  EXPECT_EQ(c.status, 1);
+  EXPECT_NE(c.out.find("/nonexistent.yaml"), std::string::npos) << c.out;
+}
+
+}  // namespace
+}  // namespace hair_sim

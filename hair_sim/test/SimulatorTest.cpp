@@ -1,0 +1,277 @@
+/// Strip dynamics, equations (1)-(7), against analytic numbers.
+#include "hair_sim/core/Simulator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "TestUtil.hpp"
+#include "hair_sim/core/model/HairstyleIO.hpp"
+#include "hair_sim/core/model/SimConfig.hpp"
+
+namespace hair_sim {
+namespace {
+
+using test::kPi;
+
+PhysicsParameters bare() {
+  PhysicsParameters p;
+  p.hinge_stiffness = 0.0;
+  p.hinge_damping = 0.0;
+  p.air_drag = 0.0;
+  p.compensate_rest_angles = false;
+  return p;
+}
+
+/// Signed angle of the first segment of column 0 about +x, from straight down (-z).
+double firstAngle(const Simulator& sim) {
+  const Vec3 d = sim.positionsHead()[2] - sim.positionsHead()[0];  // row 1, column 0 (2 columns)
+  return std::atan2(d.y(), -d.z());
+}
+
+/// Times of upward zero crossings of a sampled signal (linear interpolation).
+std::vector<double> upCrossings(const std::vector<double>& x, double dt) {
+  std::vector<double> t;
+  for (std::size_t i = 1; i < x.size(); ++i)
+    if (x[i - 1] < 0.0 && x[i] >= 0.0) t.push_back(dt * ((i - 1) + x[i - 1] / (x[i - 1] - x[i])));
+  return t;
+}
+
+TEST(SimulatorTest, RigidSegmentUnderGravitySwingsWithCompoundPendulumPeriod) {
+  const double d = 0.08, g = 9.81;
+  PhysicsParameters p = bare();
+  Simulator sim(test::hangingStrip(2, 4, d, 0.05), p);
+  std::vector<double> angle;
+  StepInputs in;
+  for (int i = 0; i < 240 * 4; ++i) {
+    sim.step(in);
+    angle.push_back(firstAngle(sim));
+  }
+  const std::vector<double> up = upCrossings(angle, p.substep);
+  ASSERT_GE(up.size(), 5u);
+  const double measured = (up.back() - up.front()) / (up.size() - 1);
+  const double expected = 2.0 * kPi * std::sqrt(2.0 * d / (3.0 * g));  // I = rho d^3/3, lever d/2
+  EXPECT_NEAR(measured, expected, 0.01 * expected);
+}
+
+TEST(SimulatorTest, HingeSpringOscillatesAtDampedFrequencyAndDecaysAtGammaOver2I) {
+  const double d = 0.05, rho = 0.01;
+  const double I = rho * d * d * d / 3.0;
+  PhysicsParameters p = bare();
+  p.gravity.setZero();
+  p.hinge_stiffness = 1e-4;
+  p.hinge_damping = 2.0 * I * 1.0;  // decay rate gamma / (2 I) = 1 /s
+  const Hairstyle style = test::hangingStrip(2, 4, d, 0.0);
+  Simulator sim(style, p);
+  // Displace the whole chain by 0.1 rad about +x (every segment keeps its hinge bend).
+  std::vector<Vec3> shape = sim.positionsHead();
+  const Mat3 turn = Eigen::AngleAxisd(0.1, Vec3::UnitX()).toRotationMatrix();
+  for (std::size_t i = 2; i < shape.size(); ++i) shape[i] = shape[i % 2] + turn * (shape[i] - shape[i % 2]);
+  sim.setShape(shape);
+  std::vector<double> angle;
+  StepInputs in;
+  for (int i = 0; i < 240 * 3; ++i) {
+    sim.step(in);
+    angle.push_back(firstAngle(sim));
+  }
+  const double k = p.hinge_stiffness, gamma = p.hinge_damping;
+  const double omega = std::sqrt(k / I - std::pow(gamma / (2 * I), 2));
+  const std::vector<double> up = upCrossings(angle, p.substep);
+  ASSERT_GE(up.size(), 4u);
+  const double period = (up.back() - up.front()) / (up.size() - 1);
+  EXPECT_NEAR(2 * kPi / period, omega, 0.02 * omega);
+  // Amplitude decay between the first and last positive peaks.
+  std::vector<std::pair<double, double>> peaks;
+  for (std::size_t i = 1; i + 1 < angle.size(); ++i)
+    if (angle[i] > angle[i - 1] && angle[i] >= angle[i + 1] && angle[i] > 0)
+      peaks.push_back({i * p.substep, angle[i]});
+  ASSERT_GE(peaks.size(), 3u);
+  const double rate =
+      std::log(peaks.front().second / peaks.back().second) / (peaks.back().first - peaks.front().first);
+  EXPECT_NEAR(rate, gamma / (2 * I), 0.02 * gamma / (2 * I));
+}
+
+TEST(SimulatorTest, ConstantWindForceDensityGivesEquilibriumTanThetaEqualsFOverRhoG) {
+  PhysicsParameters p = bare();
+  p.air_drag = 0.02;
+  p.hinge_damping = 2e-6;
+  const double wind = 3.0;
+  Simulator sim(test::hangingStrip(2, 5, 0.05, 0.0), p);
+  StepInputs in;
+  in.wind = Vec3(0.0, wind, 0.0);
+  for (int i = 0; i < 240 * 20; ++i) sim.step(in);
+  const double f = p.air_drag * wind;  // still hair in a steady wind: f = air_drag * v_air
+  const double expected = std::atan(f / (p.linear_density * 9.81));
+  const std::vector<Vec3>& x = sim.positionsHead();
+  for (std::size_t i = 2; i < x.size(); ++i) {
+    const Vec3 seg = x[i] - x[i - 2];
+    const double theta = std::atan2(seg.y(), -seg.z());
+    EXPECT_NEAR(theta, expected, 0.1 * kPi / 180.0) << "segment ending at point " << i;
+  }
+}
+
+Simulator defaultSimulator(bool compensate = true) {
+  SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  config.physics.compensate_rest_angles = compensate;
+  return Simulator(loadHairstyle(config.hairstyle_file), config.physics);
+}
+
+double maxDeviationAfterRest(Simulator& sim, double seconds) {
+  StepInputs in;
+  in.head.pose.translation() = Vec3(0.0, 0.0, 1.6);
+  const int steps = static_cast<int>(seconds / sim.parameters().substep);
+  for (int i = 0; i < steps; ++i) sim.step(in);
+  std::vector<Vec3> styled;
+  for (const Strip& s : sim.hairstyle().strips) styled.insert(styled.end(), s.points.begin(), s.points.end());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < styled.size(); ++i)
+    worst = std::max(worst, (sim.positionsHead()[i] - styled[i]).norm());
+  return worst;
+}
+
+TEST(SimulatorTest, StyledDefaultHairstyleIsTheEquilibriumAtRest) {
+  Simulator sim = defaultSimulator(true);
+  EXPECT_LT(maxDeviationAfterRest(sim, 5.0), 1e-3);
+}
+
+TEST(SimulatorTest, WithoutRestCompensationTheDefaultHairstyleSags) {
+  // The equilibrium test above can fail: without compensation gravity pulls the styled shape away.
+  Simulator sim = defaultSimulator(false);
+  EXPECT_GT(maxDeviationAfterRest(sim, 5.0), 5e-3);
+}
+
+TEST(SimulatorTest, EveryHeadOrientationStaysFiniteWithoutSpins) {
+  // A small hairstyle on a 15 degree grid of yaw, pitch, roll: the head holds each orientation for
+  // 0.2 s starting from the styled shape (gravity now points anywhere relative to the hair).
+  SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  Hairstyle style = loadHairstyle(config.hairstyle_file);
+  std::vector<Strip> some;  // strips from every ring: crown, sides, nape
+  for (std::size_t i = 0; i < style.strips.size(); i += 17) some.push_back(style.strips[i]);
+  style.strips = some;
+  Simulator sim(style, config.physics);
+  const PhysicsParameters& p = sim.parameters();
+  const double g = p.gravity.norm();
+  // Energy bound for each segment: at the start it holds at most the gravity energy of turning its
+  // midpoint from the top to the bottom (rho d g d) plus the hinge energy of the rest compensation
+  // (angle <= rho g d^2 / (2 k)); damping only removes energy, so I w^2 / 2 cannot exceed that:
+  //   w <= sqrt(2 (rho g d^2 + k theta_c^2 / 2) / I).
+  // Lower segments also feel their parent's rotation through the hinge; they get twice the bound.
+  std::vector<double> bound(sim.positionsHead().size(), 0.0);
+  for (std::size_t s = 0; s < style.strips.size(); ++s) {
+    const Strip& st = style.strips[s];
+    for (int r = 1; r < st.rows; ++r)
+      for (int c = 0; c < st.columns; ++c) {
+        const int k = sim.stripOffsets()[s] + st.index(r, c);
+        const double d = (st.point(r, c) - st.point(r - 1, c)).norm();
+        const double theta_c = p.linear_density * g * d * d / (2.0 * p.hinge_stiffness);
+        const double e = p.linear_density * g * d * d + 0.5 * p.hinge_stiffness * theta_c * theta_c;
+        bound[static_cast<std::size_t>(k)] = (r == 1 ? 1.0 : 2.0) * std::sqrt(2.0 * e / sim.inertia(k));
+      }
+  }
+  double worst_ratio = 0.0;
+  std::vector<Vec3> before;
+  for (int yaw = -180; yaw < 180; yaw += 15)
+    for (int pitch = -90; pitch <= 90; pitch += 15)
+      for (int roll = -180; roll < 180; roll += 15) {
+        sim.reset();
+        StepInputs in;
+        in.head.pose.linear() = rotationFromRpy(Vec3(roll, pitch, yaw) * kPi / 180.0);
+        for (int i = 0; i < 48; ++i) {
+          before = sim.positionsHead();
+          sim.step(in);
+          const std::vector<Vec3>& x = sim.positionsHead();
+          for (std::size_t k = 0; k < x.size(); ++k) {
+            if (bound[k] == 0.0) continue;     // roots
+            const std::size_t parent = k - 2;  // 2 columns per strip in the default hairstyle
+            const Vec3 a = (before[k] - before[parent]).normalized(), b = (x[k] - x[parent]).normalized();
+            const double rate = std::atan2(a.cross(b).norm(), a.dot(b)) / p.substep;
+            worst_ratio = std::max(worst_ratio, rate / bound[k]);
+          }
+        }
+        for (const Vec3& x : sim.positionsHead())
+          ASSERT_TRUE(x.allFinite()) << yaw << " " << pitch << " " << roll;
+      }
+  EXPECT_LT(worst_ratio, 1.0);
+  std::printf("worst segment rate / energy bound = %.3f\n", worst_ratio);
+}
+
+TEST(SimulatorTest, ContinuousTumbleStaysFiniteAndKeepsSegmentLengths) {
+  SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  Simulator sim(loadHairstyle(config.hairstyle_file), config.physics);
+  HeadMotionEstimator head;
+  head.reset(Iso3::Identity());
+  const double dt = sim.parameters().substep;
+  const Vec3 spin = Vec3(1.0, 0.7, 0.4).normalized() * 4.0;  // rad/s about a skew axis
+  double worst_rate = 0.0;
+  for (int i = 1; i <= 240 * 5; ++i) {
+    Iso3 pose = Iso3::Identity();
+    pose.linear() = Eigen::AngleAxisd(spin.norm() * i * dt, spin.normalized()).toRotationMatrix();
+    StepInputs in;
+    in.head = head.update(pose, dt);
+    sim.step(in);
+    worst_rate = std::max(worst_rate, sim.maxSegmentRate());
+  }
+  const std::vector<Vec3>& x = sim.positionsHead();
+  for (const Vec3& p : x) ASSERT_TRUE(p.allFinite());
+  int offset = 0;
+  for (const Strip& s : sim.hairstyle().strips) {
+    for (int r = 1; r < s.rows; ++r)
+      for (int c = 0; c < s.columns; ++c) {
+        const double now = (x[offset + s.index(r, c)] - x[offset + s.index(r - 1, c)]).norm();
+        EXPECT_NEAR(now, (s.point(r, c) - s.point(r - 1, c)).norm(), 1e-9);
+      }
+    offset += s.pointCount();
+  }
+  // Relative to the head a segment turns at most at the head's rate plus what the hinge and gravity
+  // alone give it (see the grid test); the tumble adds centrifugal energy, so allow 2x the spin.
+  EXPECT_LT(worst_rate, 2.0 * spin.norm() + 60.0);
+}
+
+TEST(SimulatorTest, IdenticalInputsGiveBitIdenticalResults) {
+  auto run = [] {
+    Simulator sim = defaultSimulator();
+    HeadMotionEstimator head;
+    head.reset(Iso3::Identity());
+    for (int i = 1; i <= 480; ++i) {
+      Iso3 pose = Iso3::Identity();
+      pose.linear() = rotationFromRpy(Vec3(0.0, 0.0, 0.8 * std::sin(i * 0.03)));
+      StepInputs in;
+      in.head = head.update(pose, sim.parameters().substep);
+      in.wind = Vec3(1.0, 2.0, 0.0);
+      sim.step(in);
+    }
+    return sim.positionsHead();
+  };
+  const std::vector<Vec3> a = run(), b = run();
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)));
+}
+
+TEST(SimulatorTest, RejectsBadParametersAndShapes) {
+  PhysicsParameters p;
+  p.substep = -1.0;
+  EXPECT_NE(test::errorOf([&] { Simulator(test::hangingStrip(2, 4, 0.05, 0.0), p); }).find("substep"),
+            std::string::npos);
+  p = PhysicsParameters();
+  p.hinge_stiffness = std::nan("");
+  EXPECT_NE(test::errorOf([&] { Simulator(test::hangingStrip(2, 4, 0.05, 0.0), p); }).find("hinge_stiffness"),
+            std::string::npos);
+  Simulator sim(test::hangingStrip(2, 4, 0.05, 0.0), PhysicsParameters());
+  EXPECT_NE(test::errorOf([&] { sim.setShape(std::vector<Vec3>(3)); }).find("3 points"), std::string::npos);
+}
+
+TEST(SimulatorTest, InertiaFloorOnlyBitesForUnstableCombinations) {
+  const double dt = 1.0 / 240.0;
+  // The tests above use physical inertia: the floor is far below it.
+  EXPECT_LT(Simulator::inertiaFloor(1e-4, 8.3e-7, dt), 0.01 * 0.05 * 0.05 * 0.05 / 3.0 * 0.1);
+  // A stiff hinge on a tiny segment: omega dt would exceed 2 (explicit blow-up) without the floor.
+  const double I = 0.01 * std::pow(0.002, 3) / 3.0;
+  const double floor = Simulator::inertiaFloor(4e-4, 1e-5, dt);
+  EXPECT_GT(floor, I);
+  EXPECT_LE(4e-4 * dt * dt / floor, 0.5 + 1e-12);
+}
+
+}  // namespace
+}  // namespace hair_sim

@@ -1,0 +1,64 @@
+#pragma once
+/// Shared helpers and tolerances of the core tests.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include "hair_sim/core/model/Hairstyle.hpp"
+
+namespace hair_sim {
+namespace test {
+
+constexpr double kPi = 3.14159265358979323846;
+
+inline std::string repoPath(const std::string& relative) {
+  return std::string(HAIR_SIM_REPO_ROOT) + "/" + relative;
+}
+
+/// Writes text to a fresh file under the test's temp folder and returns its path.
+inline std::string writeTemp(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + "hair_sim_" + name;
+  std::ofstream out(path);
+  out << text;
+  return path;
+}
+
+/// A hairstyle of one strip with `columns` straight columns of `rows` points hanging from the top of
+/// a sphere of radius 0.1 m, each segment of length d, tilted by `tilt` rad about +x from straight down.
+/// (The chain hangs through the sphere: these tests have no collision bodies.)
+inline Hairstyle hangingStrip(int columns, int rows, double d, double tilt, double spacing = 0.01) {
+  Hairstyle style;
+  style.scalp = Ellipsoid(Vec3::Zero(), Mat3::Identity(), Vec3(0.1, 0.1, 0.1));
+  Strip s;
+  s.columns = columns;
+  s.rows = rows;
+  s.hair_length = d * (rows - 1);
+  s.width = spacing * (columns - 1) + 1e-3;
+  s.points.resize(static_cast<std::size_t>(columns * rows));
+  const Vec3 dir(0.0, std::sin(tilt), -std::cos(tilt));  // rotation about +x of (0,0,-1)
+  for (int c = 0; c < columns; ++c) {
+    const double y = spacing * (c - 0.5 * (columns - 1));
+    const Vec3 root(0.0, y, std::sqrt(0.01 - y * y));
+    for (int r = 0; r < rows; ++r) s.point(r, c) = root + r * d * dir;
+  }
+  style.strips.push_back(s);
+  return style;
+}
+
+/// Runs f and returns the std::invalid_argument message it throws (fails the test if none).
+template <typename F>
+std::string errorOf(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected std::invalid_argument";
+  return "";
+}
+
+}  // namespace test
+}  // namespace hair_sim

@@ -1,0 +1,57 @@
+#include "hair_sim/core/util/YamlReader.hpp"
+
+#include <gtest/gtest.h>
+
+#include "TestUtil.hpp"
+
+namespace hair_sim {
+namespace {
+
+YamlReader reader(const std::string& text) {
+  return YamlReader::loadFile(test::writeTemp("reader.yaml", text));
+}
+
+TEST(YamlReaderTest, ReadsTypedValues) {
+  const YamlReader y = reader("a: 1.5\nb: 3\nc: true\nd: name\ne: [1, 2, 3]\n");
+  EXPECT_DOUBLE_EQ(y.getDouble("a", 0, 2), 1.5);
+  EXPECT_EQ(y.getInt("b", 0, 5), 3);
+  EXPECT_TRUE(y.getBool("c", false));
+  EXPECT_EQ(y.getString("d"), "name");
+  EXPECT_EQ(y.getVec3("e"), Vec3(1, 2, 3));
+  EXPECT_DOUBLE_EQ(y.getDouble("missing", 0, 1, 0.25), 0.25);
+}
+
+TEST(YamlReaderTest, ErrorsNameFileKeyLineAndValue) {
+  const YamlReader y = reader("a: 7.5\nb: .nan\nc: [1, 2]\nd: hello\ntypo: 1\n");
+  std::string m = test::errorOf([&] { y.getDouble("a", 0, 2); });
+  EXPECT_NE(m.find("reader.yaml"), std::string::npos) << m;
+  EXPECT_NE(m.find("a (line 1)"), std::string::npos) << m;
+  EXPECT_NE(m.find("7.5"), std::string::npos) << m;
+  m = test::errorOf([&] { y.getDouble("b", 0, 2); });
+  EXPECT_NE(m.find("finite"), std::string::npos) << m;
+  m = test::errorOf([&] { y.getVec3("c"); });
+  EXPECT_NE(m.find("3 numbers"), std::string::npos) << m;
+  m = test::errorOf([&] { y.getInt("d", 0, 1); });
+  EXPECT_NE(m.find("'hello'"), std::string::npos) << m;
+  m = test::errorOf([&] { y.requireKeys({"a", "b", "c", "d"}); });
+  EXPECT_NE(m.find("unknown key 'typo'"), std::string::npos) << m;
+  m = test::errorOf([&] { y.getString("absent"); });
+  EXPECT_NE(m.find("absent"), std::string::npos) << m;
+}
+
+TEST(YamlReaderTest, BadFilesAreNamed) {
+  std::string m = test::errorOf([] { YamlReader::loadFile("/nonexistent/x.yaml"); });
+  EXPECT_NE(m.find("/nonexistent/x.yaml"), std::string::npos);
+  m = test::errorOf([] { YamlReader::loadFile(test::writeTemp("broken.yaml", "a: [1, 2\n")); });
+  EXPECT_NE(m.find("syntax"), std::string::npos) << m;
+  m = test::errorOf([] { YamlReader::loadFile(test::writeTemp("list.yaml", "- 1\n- 2\n")); });
+  EXPECT_NE(m.find("top level"), std::string::npos) << m;
+}
+
+TEST(YamlReaderTest, FormatDoubleRoundTrips) {
+  for (double v : {0.1, 1.0 / 3.0, 1e-300, -2.5e17, 0.004166666666666667})
+    EXPECT_EQ(std::stod(formatDouble(v)), v);
+}
+
+}  // namespace
+}  // namespace hair_sim

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# hair_sim: set up, build and run. Usage: ./run.sh demo | test | bench | build
+# Installs what it needs with apt (as root, or through sudo) on a fresh Debian 12 machine.
+set -eo pipefail
+cd "$(dirname "$(readlink -f "$0")")"
+ROOT=$PWD
+# Debian's ROS tools need Debian's python3 (a pyenv python3 first on PATH cannot import rospy).
+export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
+export ROS_HOSTNAME=localhost ROS_LANG_DISABLE=genlisp:geneus:gennodejs
+export ROS_HOME=$ROOT/build/ros_home ROS_LOG_DIR=$ROOT/build/ros_home/log
+
+PACKAGES="build-essential cmake catkin ros-core-dev rosbash python3-rostest librostest-dev libgtest-dev
+  libeigen3-dev libyaml-cpp-dev libtf2-ros-dev libtf2-eigen-dev libvisualization-msgs-dev
+  libgeometry-msgs-dev libstd-srvs-dev python3-geometry-msgs python3-visualization-msgs python3-std-srvs
+  libbenchmark-dev"
+
+install_deps() {
+  local missing=()
+  for p in $PACKAGES; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  echo "run.sh: installing ${missing[*]}" >&2
+  local SUDO=""
+  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+build() {
+  local type=${1:-RelWithDebInfo}
+  cmake -S . -B build -DCMAKE_BUILD_TYPE="$type" -DCATKIN_DEVEL_PREFIX="$ROOT/build/devel" >build/cmake.log 2>&1 ||
+    { mkdir -p build; cmake -S . -B build -DCMAKE_BUILD_TYPE="$type" -DCATKIN_DEVEL_PREFIX="$ROOT/build/devel"; }
+  cmake --build build -j"$(nproc)"
+}
+
+mkdir -p build "$ROS_LOG_DIR"
+cmd=${1:-}
+case "$cmd" in
+  build)
+    install_deps
+    build
+    ;;
+  demo)
+    install_deps
+    build
+    bin=build/devel/lib/hair_sim/hair_sim_offline
+    echo "run.sh: offline runner, default hairstyle, head-shake scenario -> build/demo/" >&2
+    mkdir -p build/demo
+    "$bin" --config config/hair_sim.yaml --scenario config/scenarios/head_shake.yaml \
+      --out build/demo/control_points.csv --poses-out build/demo/head_poses.csv
+    ;;
+  test)
+    install_deps
+    build
+    cmake --build build --target tests -j"$(nproc)"
+    cd build && ctest --output-on-failure -j"$(nproc)"
+    ;;
+  *)
+    echo "usage: ./run.sh demo | test | build" >&2
+    exit 2
+    ;;
+esac
