@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
+#include <unordered_map>
+#include <unordered_set>
 
 namespace hair_sim {
 
@@ -50,11 +53,12 @@ double Simulator::inertiaFloor(double stiffness, double damping, double dt) {
   return std::max(damping * dt, 2.0 * stiffness * dt * dt);
 }
 
-Simulator::Simulator(Hairstyle hairstyle, PhysicsParameters parameters)
-    : hairstyle_(std::move(hairstyle)), params_(std::move(parameters)) {
+Simulator::Simulator(Hairstyle hairstyle, PhysicsParameters parameters, std::vector<Body> bodies)
+    : hairstyle_(std::move(hairstyle)), params_(std::move(parameters)), bodies_(std::move(bodies)) {
   params_.validate();
   hairstyle_.validate("Simulator::Simulator(...) : hairstyle");
   buildChains();
+  buildSprings();
   reset();
 }
 
@@ -71,12 +75,23 @@ void Simulator::buildChains() {
   length_.assign(sn, 0.0);
   inv_inertia_.assign(sn, 0.0);
   strip_offset_.clear();
+  spring_force_.assign(sn, Vec3::Zero());
+  strip_of_point_.assign(sn, 0);
+  margins_.clear();
+  margin_of_strip_.clear();
+  for (const Strip& s : hairstyle_.strips) {
+    std::size_t m = 0;
+    while (m < margins_.size() && margins_[m] != s.thickness_margin) ++m;
+    if (m == margins_.size()) margins_.push_back(s.thickness_margin);
+    margin_of_strip_.push_back(static_cast<int>(m));
+  }
   const double dt = params_.substep;
   const double k = params_.hinge_stiffness;
-  const double floor = inertiaFloor(k, params_.hinge_damping, dt);
   int offset = 0;
   for (const Strip& s : hairstyle_.strips) {
     strip_offset_.push_back(offset);
+    for (int p = 0; p < s.pointCount(); ++p)
+      strip_of_point_[static_cast<std::size_t>(offset + p)] = static_cast<int>(strip_offset_.size() - 1);
     for (int r = 1; r < s.rows; ++r) {
       for (int c = 0; c < s.columns; ++c) {
         const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
@@ -85,6 +100,13 @@ void Simulator::buildChains() {
         length_[i] = d;
         styled_dir_[i] = seg / d;
         const double inertia = params_.linear_density * d * d * d / 3.0;
+        // Linear springs at the lever d/2: the collision constraint and up to the springs of this point.
+        const int pairs = (params_.springs_within_strips ? 2 : 0) +
+                          (params_.springs_between_strips ? params_.spring_max_pairs : 0);
+        const double k_lin = params_.collision_stiffness + pairs * params_.spring_stiffness;
+        const double c_lin = params_.collision_damping + params_.air_drag * d;
+        const double floor =
+            inertiaFloor(k + k_lin * 0.25 * d * d, params_.hinge_damping + c_lin * 0.25 * d * d, dt);
         inv_inertia_[i] = 1.0 / std::max(inertia, floor);
         // Compensation: the hinge is pre-bent so that at the styled direction its torque cancels the
         // torque of gravity: rest = exp(-tau_g / k) styled, tau_g = (d/2) n x (rho d g).
@@ -124,6 +146,220 @@ void Simulator::reset() {
   }
   steps_ = 0;
   max_rate_ = 0.0;
+  have_bodies_before_ = false;
+  max_penetration_ = 0.0;
+  collisions_ = 0;
+}
+
+void Simulator::buildSprings() {
+  springs_.clear();
+  std::vector<Vec3> styled;  // pairs and rest lengths come from the styled shape
+  for (const Strip& s : hairstyle_.strips) styled.insert(styled.end(), s.points.begin(), s.points.end());
+  if (params_.springs_within_strips) {
+    for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
+      const Strip& s = hairstyle_.strips[si];
+      for (int r = 1; r < s.rows; ++r)
+        for (int c = 0; c + 1 < s.columns; ++c) {
+          SpringPair pair;
+          pair.a = strip_offset_[si] + s.index(r, c);
+          pair.b = strip_offset_[si] + s.index(r, c + 1);
+          pair.rest =
+              (styled[static_cast<std::size_t>(pair.a)] - styled[static_cast<std::size_t>(pair.b)]).norm();
+          pair.within_strip = true;
+          if (pair.rest > 1e-6) springs_.push_back(pair);
+        }
+    }
+  }
+  const double radius = params_.spring_radius;
+  if (params_.springs_between_strips && radius > 0.0 && params_.spring_max_pairs > 0) {
+    // Uniform grid of cell size = radius: each point looks at the 27 cells around it, so set-up is
+    // linear in the number of control points for a bounded density.
+    std::unordered_map<std::int64_t, std::vector<int>> grid;
+    auto cellOf = [radius](const Vec3& p) {
+      return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / radius)),
+                             static_cast<int>(std::floor(p.y() / radius)),
+                             static_cast<int>(std::floor(p.z() / radius)));
+    };
+    auto key = [](const Eigen::Vector3i& c) {
+      return (static_cast<std::int64_t>(c.x() & 0x1FFFFF) << 42) |
+             (static_cast<std::int64_t>(c.y() & 0x1FFFFF) << 21) |
+             static_cast<std::int64_t>(c.z() & 0x1FFFFF);
+    };
+    std::vector<char> is_root(styled.size(), 0);
+    for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si)
+      for (int c = 0; c < hairstyle_.strips[si].columns; ++c)
+        is_root[static_cast<std::size_t>(strip_offset_[si] + c)] = 1;
+    for (std::size_t i = 0; i < styled.size(); ++i)
+      if (!is_root[i]) grid[key(cellOf(styled[i]))].push_back(static_cast<int>(i));
+    std::vector<std::pair<double, int>> near;
+    std::unordered_set<std::int64_t> paired;
+    for (std::size_t i = 0; i < styled.size(); ++i) {
+      if (is_root[i]) continue;
+      near.clear();
+      const Eigen::Vector3i c = cellOf(styled[i]);
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto it = grid.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+            if (it == grid.end()) continue;
+            for (int j : it->second) {
+              if (strip_of_point_[static_cast<std::size_t>(j)] == strip_of_point_[i]) continue;
+              const double dist = (styled[static_cast<std::size_t>(j)] - styled[i]).norm();
+              if (dist < radius && dist > 1e-6) near.push_back({dist, j});
+            }
+          }
+      std::sort(near.begin(), near.end());
+      const std::size_t keep = std::min(near.size(), static_cast<std::size_t>(params_.spring_max_pairs));
+      for (std::size_t n = 0; n < keep; ++n) {
+        const int j = near[n].second;
+        const int a = std::min(j, static_cast<int>(i)), b = std::max(j, static_cast<int>(i));
+        if (!paired.insert((static_cast<std::int64_t>(a) << 32) | b).second) continue;  // each pair once
+        springs_.push_back(SpringPair{static_cast<int>(i), j, near[n].first, false});
+      }
+    }
+  }
+}
+
+void Simulator::computeSpringForces() {
+  std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
+  const double ks = params_.spring_stiffness;
+  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
+  double min_ratio[2] = {1e300, 1e300}, max_ratio[2] = {0.0, 0.0};
+  double min_gap = 1e300;
+  for (const SpringPair& p : springs_) {
+    const Vec3 delta = positions_[static_cast<std::size_t>(p.b)] - positions_[static_cast<std::size_t>(p.a)];
+    const double length = delta.norm();
+    const int kind = p.within_strip ? 1 : 0;
+    const double ratio = length / p.rest;
+    min_ratio[kind] = std::min(min_ratio[kind], ratio);
+    max_ratio[kind] = std::max(max_ratio[kind], ratio);
+    if (!p.within_strip) min_gap = std::min(min_gap, length);
+    // (11) with a dead band: x = stretch beyond the band, F = -k_s x along the pair.
+    double x = 0.0;
+    if (ratio < lo)
+      x = length - lo * p.rest;
+    else if (ratio > hi)
+      x = length - hi * p.rest;
+    if (x == 0.0 || length < 1e-12) continue;
+    const Vec3 f =
+        (ks * x / length) * delta;  // pulls a toward b when stretched, pushes apart when compressed
+    spring_force_[static_cast<std::size_t>(p.a)] += f;
+    spring_force_[static_cast<std::size_t>(p.b)] -= f;
+  }
+  for (int k = 0; k < 2; ++k) {
+    min_ratio_[k] = min_ratio[k] == 1e300 ? 1.0 : min_ratio[k];
+    max_ratio_[k] = max_ratio[k] == 0.0 ? 1.0 : max_ratio[k];
+  }
+  min_gap_ = min_gap == 1e300 ? 0.0 : min_gap;
+}
+
+std::vector<Ellipsoid> Simulator::bodiesInHeadFrame(const Iso3& head_pose, const std::vector<Iso3>& frames,
+                                                    double margin) const {
+  if (frames.size() != bodies_.size())
+    throw std::invalid_argument("Simulator::bodiesInHeadFrame(...) : " + std::to_string(frames.size()) +
+                                " body frame poses for " + std::to_string(bodies_.size()) + " bodies");
+  std::vector<Ellipsoid> out;
+  out.reserve(bodies_.size());
+  const Iso3 head_inv = head_pose.inverse();
+  for (std::size_t b = 0; b < bodies_.size(); ++b)
+    out.push_back(bodies_[b].shape.inflated(margin).transformed(head_inv * frames[b]));
+  return out;
+}
+
+namespace {
+
+/// Does the straight path q0 -> q1 (sphere space) enter the unit sphere from outside?
+bool pathEntersUnitSphere(const Vec3& q0, const Vec3& q1) {
+  const double c = q0.squaredNorm() - 1.0;
+  if (c <= 0.0) return false;  // starts inside: not an entry (handled as "inside")
+  const Vec3 d = q1 - q0;
+  const double a = d.squaredNorm();
+  if (a < 1e-300) return false;
+  const double b = q0.dot(d);
+  if (b >= 0.0) return false;  // moving away
+  const double disc = b * b - a * c;
+  if (disc < 0.0) return false;
+  const double t = (-b - std::sqrt(disc)) / a;
+  return t <= 1.0;
+}
+
+/// Does the straight segment p0 -> p1 cut through the body (p0 outside)?
+bool segmentCrosses(const Ellipsoid& e, const Vec3& p0, const Vec3& p1) {
+  return pathEntersUnitSphere(e.toSphere(p0), e.toSphere(p1));
+}
+
+}  // namespace
+
+Vec3 Simulator::resolveCollisions(const Vec3& pivot, double d, const Vec3& dir, const Vec3& previous_end,
+                                  const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
+  const std::size_t nb = now.size();
+  // Validity for one body: end outside, segment not cutting through it (pivot outside), and the end's
+  // path over the substep, relative to the moving body, not entering it (the paper's ray test).
+  auto validFor = [&](std::size_t b, const Vec3& u) {
+    const Ellipsoid& e = now[b];
+    const Vec3 end = pivot + d * u;
+    if (e.implicitValue(end) <= 1e-12) return false;
+    if (e.contains(pivot)) return true;  // a root inside its inflated scalp: only the end point counts
+    if (segmentCrosses(e, pivot, end)) return false;
+    if (!before.empty() && pathEntersUnitSphere(before[b].toSphere(previous_end), e.toSphere(end)))
+      return false;
+    return true;
+  };
+  auto validAll = [&](const Vec3& u) {
+    for (std::size_t b = 0; b < nb; ++b)
+      if (!validFor(b, u)) return false;
+    return true;
+  };
+  if (validAll(dir)) return dir;
+  ++collisions_;
+  // Bisection on the arc from -> to (to valid) for the valid direction closest to `from`.
+  auto bisect = [&](const Vec3& from, const Vec3& to) {
+    const Vec3 arc = rotationVectorBetween(from, to);
+    double lo = 0.0, hi = 1.0;
+    for (int it = 0; it < 40; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      if (validAll(rotateByVector(arc * mid, from)))
+        hi = mid;
+      else
+        lo = mid;
+    }
+    return Vec3(rotateByVector(arc * hi, from).normalized());
+  };
+  // Candidate escape directions: the outward normal at the pivot's nearest point of each violated
+  // body (pivot + d N clears a convex body), their mean (for a crevice between two bodies), and the
+  // segment's direction at the start of the substep.
+  Vec3 normals[8] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(),
+                     Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
+  int count = 0;
+  Vec3 sum = Vec3::Zero();
+  for (std::size_t b = 0; b < nb && count < 7; ++b) {
+    if (validFor(b, dir)) continue;
+    normals[count] = now[b].closestPoint(pivot).normal;
+    sum += normals[count++];
+  }
+  if (count > 1 && sum.norm() > 1e-9) normals[count++] = sum.normalized();
+  for (int c = 0; c < count; ++c)
+    if (validAll(normals[c])) return bisect(dir, normals[c]);
+  // No single escape clears every body (a pinch between overlapping bodies): search the sphere of
+  // directions around the pivot for the one with the smallest worst penetration.
+  Vec3 best = normals[count > 1 ? count - 1 : 0];
+  double best_depth = 1e300;
+  const Vec3 base = count > 1 ? normals[count - 1] : normals[0];
+  const Vec3 t1 = base.unitOrthogonal(), t2 = base.cross(t1);
+  for (int ring = 0; ring <= 12; ++ring) {
+    const double polar = 3.14159265358979 * ring / 12.0;
+    const int around = ring == 0 || ring == 12 ? 1 : 24;
+    for (int j = 0; j < around; ++j) {
+      const double az = 2.0 * 3.14159265358979 * j / around;
+      const Vec3 u = std::cos(polar) * base + std::sin(polar) * (std::cos(az) * t1 + std::sin(az) * t2);
+      if (validAll(u)) return bisect(dir, u);
+      double worst = 0.0;
+      for (std::size_t b = 0; b < nb; ++b)
+        worst = std::max(worst, std::max(0.0, -now[b].implicitValue(pivot + d * u)));
+      if (worst < best_depth) best_depth = worst, best = u;
+    }
+  }
+  return best;
 }
 
 void Simulator::setShape(const std::vector<Vec3>& target) {
@@ -166,9 +402,26 @@ void Simulator::step(const StepInputs& in) {
   const Vec3 alpha = Rt * in.head.angular_acceleration;
   const Vec3 air0 = Rt * (in.wind - in.head.linear_velocity);  // air velocity at the head origin, head frame
   double max_rate = 0.0;
+  const double k_c = params_.collision_stiffness, c_c = params_.collision_damping;
+  collisions_ = 0;
+  double max_penetration = 0.0;
+  if (!bodies_.empty()) {
+    bodies_now_.resize(margins_.size());
+    for (std::size_t m = 0; m < margins_.size(); ++m)
+      bodies_now_[m] = bodiesInHeadFrame(in.head.pose, in.body_frames, margins_[m]);
+  }
+  if (!springs_.empty()) computeSpringForces();
+  static const std::vector<Ellipsoid> kNone;
 
   int offset = 0;
-  for (const Strip& s : hairstyle_.strips) {
+  for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
+    const Strip& s = hairstyle_.strips[si];
+    const std::vector<Ellipsoid>& bodies_now =
+        bodies_.empty() ? kNone : bodies_now_[static_cast<std::size_t>(margin_of_strip_[si])];
+    const std::vector<Ellipsoid>& bodies_before =
+        (bodies_.empty() || !have_bodies_before_)
+            ? kNone
+            : bodies_before_[static_cast<std::size_t>(margin_of_strip_[si])];
     for (int c = 0; c < s.columns; ++c) {
       Mat3 Q = Mat3::Identity();  // rotation of the parent segment from its styled frame
       std::size_t parent = static_cast<std::size_t>(offset + s.index(0, c));
@@ -184,7 +437,15 @@ void Simulator::step(const StepInputs& in) {
         // (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the hair.
         const Vec3 a = -acc0 - alpha.cross(mid) - omega.cross(omega.cross(mid)) - 2.0 * omega.cross(v);
         const Vec3 air = air0 - omega.cross(mid);
-        const Vec3 F = rho * d * (g + a) + d * drag * (air - v);
+        Vec3 F = rho * d * (g + a) + d * drag * (air - v) + spring_force_[i];
+        // (8)-(10): reaction constraint while the control point is inside an inflated body.
+        const Vec3 end_now = pivot + d * n;
+        for (const Ellipsoid& e : bodies_now) {
+          if (!e.contains(end_now)) continue;
+          const Ellipsoid::ClosestPoint cp = e.closestPoint(end_now);
+          const Vec3 v_end = (end_now - positions_[i]) / dt;
+          F = reactionForce(F, -cp.normal, -cp.signed_distance, v_end, k_c, c_c);
+        }
         // (4)-(5): moment of F at the lever d/2 about the two axes perpendicular to the segment.
         Vec3 M = 0.5 * d * n.cross(F);
         // (3): hinge spring toward the rest direction carried by the parent.
@@ -201,6 +462,13 @@ void Simulator::step(const StepInputs& in) {
         const double bend_angle = bend.norm();
         if (bend_angle > params_.max_bend)
           next = rotateByVector(bend * (params_.max_bend / bend_angle), rest);
+        if (!bodies_now.empty()) {
+          next = resolveCollisions(pivot, d, next, positions_[i], bodies_now, bodies_before);
+          const Vec3 end = pivot + d * next;
+          for (const Ellipsoid& e : bodies_now)
+            if (e.contains(end))
+              max_penetration = std::max(max_penetration, -e.closestPoint(end).signed_distance);
+        }
         w = rotationVectorBetween(n, next);
         max_rate = std::max(max_rate, w.norm() / dt);
         rate_[i] = w;
@@ -216,6 +484,11 @@ void Simulator::step(const StepInputs& in) {
     offset += s.pointCount();
   }
   max_rate_ = max_rate;
+  max_penetration_ = max_penetration;
+  if (!bodies_.empty()) {
+    bodies_before_ = bodies_now_;
+    have_bodies_before_ = true;
+  }
   ++steps_;
 }
 

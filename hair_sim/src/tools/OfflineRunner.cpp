@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "hair_sim/core/util/YamlReader.hpp"
 
@@ -15,6 +16,8 @@ std::string RunSummary::toJson() const {
     << ", \"wall_seconds\": " << formatDouble(wall_seconds)
     << ", \"ns_per_control_point_update\": " << formatDouble(ns_per_control_point_update)
     << ", \"max_segment_rate\": " << formatDouble(max_segment_rate)
+    << ", \"max_penetration_m\": " << formatDouble(max_penetration_m)
+    << ", \"min_strip_gap_m\": " << formatDouble(min_strip_gap_m) << ", \"collisions\": " << collisions
     << ", \"all_finite\": " << (all_finite ? "true" : "false") << "}";
   return o.str();
 }
@@ -22,7 +25,20 @@ std::string RunSummary::toJson() const {
 OfflineRunner::OfflineRunner(SimConfig config, Hairstyle hairstyle, Scenario scenario)
     : config_(std::move(config)),
       scenario_(std::move(scenario)),
-      simulator_(std::move(hairstyle), config_.physics) {}
+      simulator_(std::move(hairstyle), config_.physics, config_.bodies) {
+  for (const Body& b : config_.bodies)
+    if (b.frame != config_.head_frame && b.frame != config_.world_frame)
+      throw std::invalid_argument("bodies: body '" + b.name + "' is in frame '" + b.frame +
+                                  "': the offline runner knows only head_frame '" + config_.head_frame +
+                                  "' and world_frame '" + config_.world_frame + "'");
+}
+
+std::vector<Iso3> OfflineRunner::bodyFrames(const Iso3& head_pose) const {
+  std::vector<Iso3> frames;
+  for (const Body& b : config_.bodies)
+    frames.push_back(b.frame == config_.head_frame ? head_pose : Iso3::Identity());
+  return frames;
+}
 
 RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_frame) {
   const double dt = config_.physics.substep;
@@ -45,8 +61,14 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
       StepInputs in;
       in.head = head.update(scenario_.headPose(t), dt);
       in.wind = scenario_.windVelocity(t);
+      in.body_frames = bodyFrames(in.head.pose);
       simulator_.step(in);
       summary.max_segment_rate = std::max(summary.max_segment_rate, simulator_.maxSegmentRate());
+      summary.max_penetration_m = std::max(summary.max_penetration_m, simulator_.maxPenetration());
+      if (!simulator_.springs().empty())
+        summary.min_strip_gap_m =
+            n == 1 ? simulator_.minStripGap() : std::min(summary.min_strip_gap_m, simulator_.minStripGap());
+      summary.collisions += simulator_.collisionCount();
     }
     stepping_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     simulator_.positionsWorld(head.state().pose, world);

@@ -2,21 +2,27 @@
 #include <exception>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "hair_sim/core/model/HairstyleGenerator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
+#include "hair_sim/core/model/SimConfig.hpp"
 
 namespace {
 const char* kUsage =
     "Usage: hair_sim_generate --out FILE.yaml [--strips N] [--rings N] [--columns N] [--rows N]\n"
     "                         [--length-front M] [--length-back M] [--seed N]\n"
+    "                         [--config FILE [--head-z M]]\n"
     "Covers an adult scalp ellipsoid (radii 0.095 0.075 0.115 m, head frame) with about N strips\n"
-    "(default 100) in rings, with a parting and lengths growing from the front to the back.\n";
+    "(default 100) in rings, with a parting and lengths growing from the front to the back.\n"
+    "With --config, the strips are draped clear of the config's bodies (the body named 'head' is\n"
+    "the scalp), with the head frame at height --head-z (default 1.6 m) in the world frame.\n";
 }
 
 int main(int argc, char** argv) {
   hair_sim::GeneratorOptions o;
-  std::string out;
+  std::string out, config_path;
+  double head_z = 1.6;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -45,6 +51,10 @@ int main(int argc, char** argv) {
         o.length_back = std::stod(v);
       else if (a == "--seed")
         o.seed = static_cast<std::uint32_t>(std::stoul(v));
+      else if (a == "--config")
+        config_path = v;
+      else if (a == "--head-z")
+        head_z = std::stod(v);
       else {
         std::cerr << "hair_sim_generate: unknown argument '" << a << "'\n" << kUsage;
         return 2;
@@ -54,9 +64,24 @@ int main(int argc, char** argv) {
       std::cerr << "hair_sim_generate: --out is required\n" << kUsage;
       return 2;
     }
-    const hair_sim::Ellipsoid scalp(hair_sim::Vec3::Zero(), hair_sim::Mat3::Identity(),
-                                    hair_sim::Vec3(0.095, 0.075, 0.115));
-    const hair_sim::Hairstyle style = hair_sim::generateHairstyle(scalp, o);
+    hair_sim::Ellipsoid scalp(hair_sim::Vec3::Zero(), hair_sim::Mat3::Identity(),
+                              hair_sim::Vec3(0.095, 0.075, 0.115));
+    std::vector<hair_sim::Ellipsoid> obstacles;
+    if (!config_path.empty()) {
+      const hair_sim::SimConfig config = hair_sim::loadSimConfig(config_path);
+      hair_sim::Iso3 head_in_world = hair_sim::Iso3::Identity();
+      head_in_world.translation() = hair_sim::Vec3(0.0, 0.0, head_z);
+      for (const hair_sim::Body& b : config.bodies) {
+        if (b.name == "head") {
+          scalp = b.shape;
+        } else if (b.frame == config.head_frame) {
+          obstacles.push_back(b.shape);
+        } else {
+          obstacles.push_back(b.shape.transformed(head_in_world.inverse()));
+        }
+      }
+    }
+    const hair_sim::Hairstyle style = hair_sim::generateHairstyle(scalp, o, obstacles);
     style.validate(out);
     hair_sim::saveHairstyle(style, out);
     std::cout << "hair_sim_generate: " << style.strips.size() << " strips, " << style.controlPointCount()

@@ -16,9 +16,23 @@
 /// (relative to the parent segment, the hinge); the first segment's is fixed in the head frame.
 /// Rest directions are compensated so that the styled shape is the equilibrium under gravity at the
 /// rest head pose.
+///
+/// Collisions (paper 4.3a): a control point inside a body inflated by its strip's thickness margin
+/// gets the reaction constraint (8)-(10) on F. After the angle update, the new end point of every
+/// segment is checked against every inflated body: inside, on a path that entered the body during
+/// the substep (the paper's ray test, in sphere space, with the body's motion), or with the segment
+/// cutting through it, the segment is turned (length kept) by bisection toward the outward normal
+/// at its pivot until none of that holds. So no control point below the roots ends a substep inside
+/// an inflated body.
+///
+/// Springs (paper 4.3b, equation 11): pairs within a strip (neighbouring columns, same row) and
+/// between strips (control points closer than a radius at rest, found through a uniform grid, the
+/// nearest few per point) pull or push along the pair with k_s times the stretch outside the band
+/// [proximity_factor, far_factor] x rest length; their force joins F before the projection (5).
 #include <vector>
 
 #include "hair_sim/core/dynamics/HeadState.hpp"
+#include "hair_sim/core/model/Body.hpp"
 #include "hair_sim/core/model/Hairstyle.hpp"
 #include "hair_sim/core/model/PhysicsParameters.hpp"
 
@@ -28,12 +42,22 @@ namespace hair_sim {
 struct StepInputs {
   HeadState head;
   Vec3 wind = Vec3::Zero();  ///< air velocity, world frame (m/s)
+  /// World pose of each body's frame, in the order of the bodies given to the Simulator.
+  std::vector<Iso3> body_frames;
+};
+
+/// One spring of equation (11) between control points a and b (indices into positionsHead()).
+struct SpringPair {
+  int a = 0;
+  int b = 0;
+  double rest = 0.0;  ///< rest length (m)
+  bool within_strip = true;
 };
 
 class Simulator {
  public:
   /// Throws std::invalid_argument on invalid parameters or hairstyle.
-  Simulator(Hairstyle hairstyle, PhysicsParameters parameters);
+  Simulator(Hairstyle hairstyle, PhysicsParameters parameters, std::vector<Body> bodies = {});
 
   /// Back to the styled rest shape, still.
   void reset();
@@ -58,13 +82,34 @@ class Simulator {
   double inertia(int k) const { return 1.0 / inv_inertia_[static_cast<std::size_t>(k)]; }
   /// Largest angular rate any segment had relative to the head in the last substep (rad/s).
   double maxSegmentRate() const { return max_rate_; }
+  const std::vector<Body>& bodies() const { return bodies_; }
+  const std::vector<SpringPair>& springs() const { return springs_; }
+  /// Deepest control point (below the roots) inside any inflated body after the last substep (m, 0 = none).
+  double maxPenetration() const { return max_penetration_; }
+  /// Smallest distance between paired control points of different strips after the last substep (m).
+  double minStripGap() const { return min_gap_; }
+  /// Smallest distance / rest length over the springs of the given kind after the last substep.
+  double minSpringRatio(bool within_strip) const { return min_ratio_[within_strip ? 1 : 0]; }
+  /// Largest distance / rest length over the springs of the given kind after the last substep.
+  double maxSpringRatio(bool within_strip) const { return max_ratio_[within_strip ? 1 : 0]; }
+  /// Segments turned out of a body in the last substep.
+  int collisionCount() const { return collisions_; }
+  /// The bodies in the head frame, inflated by `margin`, for a head pose and body frame poses.
+  std::vector<Ellipsoid> bodiesInHeadFrame(const Iso3& head_pose, const std::vector<Iso3>& body_frames,
+                                           double margin) const;
 
   /// Smallest moment of inertia that keeps the explicit scheme (7) stable with margin for this
-  /// stiffness and damping: gamma dt / I <= 1 and k dt^2 / I <= 0.5 (omega dt <= 0.71).
+  /// angular stiffness and damping: gamma dt / I <= 1 and k dt^2 / I <= 0.5 (omega dt <= 0.71).
+  /// Linear springs k_lin acting at the lever d/2 add k_lin (d/2)^2 to the angular stiffness.
   static double inertiaFloor(double stiffness, double damping, double dt);
 
  private:
   void buildChains();
+  void buildSprings();
+  void computeSpringForces();
+  /// Turns the segment pivot -> pivot + d * dir out of the bodies; returns the corrected direction.
+  Vec3 resolveCollisions(const Vec3& pivot, double d, const Vec3& dir, const Vec3& previous_end,
+                         const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
 
   Hairstyle hairstyle_;
   PhysicsParameters params_;
@@ -81,6 +126,21 @@ class Simulator {
   std::vector<Vec3> rest_dir_;       ///< compensated rest direction at the styled pose (head frame)
   std::vector<double> length_;       ///< d
   std::vector<double> inv_inertia_;  ///< 1 / I
+  std::vector<Vec3> spring_force_;   ///< equation (11) force on each control point this substep
+  std::vector<int> strip_of_point_;
+  std::vector<int> margin_of_strip_;  ///< index into margins_
+  std::vector<double> margins_;       ///< distinct thickness margins
+  std::vector<Body> bodies_;
+  std::vector<SpringPair> springs_;
+  // Bodies in the head frame, per distinct margin, now and at the previous substep.
+  std::vector<std::vector<Ellipsoid>> bodies_now_;
+  std::vector<std::vector<Ellipsoid>> bodies_before_;
+  bool have_bodies_before_ = false;
+  double max_penetration_ = 0.0;
+  double min_gap_ = 0.0;
+  double min_ratio_[2] = {1.0, 1.0};
+  double max_ratio_[2] = {1.0, 1.0};
+  int collisions_ = 0;
 };
 
 /// Rotation vector that turns unit a onto unit b (axis a x b, angle in [0, pi]); a deterministic

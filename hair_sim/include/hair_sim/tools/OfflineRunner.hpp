@@ -19,7 +19,10 @@ struct RunSummary {
   double sim_seconds = 0.0;
   double wall_seconds = 0.0;
   double ns_per_control_point_update = 0.0;
-  double max_segment_rate = 0.0;  ///< rad/s, relative to the head
+  double max_segment_rate = 0.0;   ///< rad/s, relative to the head
+  double max_penetration_m = 0.0;  ///< deepest control point inside an inflated body over the run
+  double min_strip_gap_m = 0.0;    ///< smallest distance between paired points of different strips
+  long collisions = 0;             ///< segments turned out of a body, summed over the run
   bool all_finite = true;
 
   std::string toJson() const;
@@ -35,7 +38,10 @@ struct OutputFrame {
 
 class OfflineRunner {
  public:
+  /// Throws std::invalid_argument if a body's frame is neither the config's head_frame nor its world_frame.
   OfflineRunner(SimConfig config, Hairstyle hairstyle, Scenario scenario);
+  /// World pose of every body's frame for a head pose.
+  std::vector<Iso3> bodyFrames(const Iso3& head_pose) const;
   /// Steps the whole scenario; calls on_frame at t = 0, 1/output_rate, ... <= duration. A frame at t
   /// shows the state after the last substep whose time is <= t (within 1e-9 s), so output rates that
   /// divide the substep rate see identical states.

@@ -23,7 +23,8 @@ void checkFrame(const YamlReader& y, const std::string& key, const std::string& 
 
 SimConfig loadSimConfig(const std::string& path) {
   const YamlReader y = YamlReader::loadFile(path);
-  y.requireKeys({"world_frame", "head_frame", "publish_rate", "hairstyle", "physics"});
+  y.requireKeys({"world_frame", "head_frame", "publish_rate", "hairstyle", "physics", "collision", "springs",
+                 "bodies"});
   SimConfig c;
   c.world_frame = y.getString("world_frame", c.world_frame);
   checkFrame(y, "world_frame", c.world_frame);
@@ -48,6 +49,46 @@ SimConfig loadSimConfig(const std::string& path) {
     q.max_bend = p.getDouble("max_bend", 0.1, 3.0, q.max_bend);
     q.compensate_rest_angles = p.getBool("compensate_rest_angles", q.compensate_rest_angles);
     if (q.gravity.norm() > 1000.0) throw p.error("gravity", "magnitude above 1000 m/s^2");
+  }
+  if (y.has("collision")) {
+    const YamlReader p = y.child("collision");
+    p.requireKeys({"stiffness", "damping"});
+    c.physics.collision_stiffness = p.getDouble("stiffness", 0.0, 1e6, c.physics.collision_stiffness);
+    c.physics.collision_damping = p.getDouble("damping", 0.0, 1e6, c.physics.collision_damping);
+  }
+  if (y.has("springs")) {
+    const YamlReader p = y.child("springs");
+    p.requireKeys({"within_strips", "between_strips", "stiffness", "proximity_factor", "far_factor", "radius",
+                   "max_pairs"});
+    PhysicsParameters& q = c.physics;
+    q.springs_within_strips = p.getBool("within_strips", q.springs_within_strips);
+    q.springs_between_strips = p.getBool("between_strips", q.springs_between_strips);
+    q.spring_stiffness = p.getDouble("stiffness", 0.0, 1e6, q.spring_stiffness);
+    q.spring_proximity_factor = p.getDouble("proximity_factor", 1e-3, 1.0, q.spring_proximity_factor);
+    q.spring_far_factor = p.getDouble("far_factor", 1.0, 100.0, q.spring_far_factor);
+    q.spring_radius = p.getDouble("radius", 0.0, 0.5, q.spring_radius);
+    q.spring_max_pairs = p.getInt("max_pairs", 0, 16, q.spring_max_pairs);
+  }
+  if (y.has("bodies")) {
+    const YamlReader list = y.child("bodies");
+    list.requireSequence();
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const YamlReader b = list.at(i);
+      b.requireKeys({"name", "frame", "center", "rpy", "radii"});
+      Body body;
+      body.name = b.getString("name");
+      if (body.name.empty()) throw b.error("name", "must not be empty");
+      for (const Body& other : c.bodies)
+        if (other.name == body.name) throw b.error("name", "'" + body.name + "' is used by two bodies");
+      body.frame = b.getString("frame");
+      checkFrame(b, "frame", body.frame);
+      const Vec3 radii = b.getVec3("radii");
+      for (int k = 0; k < 3; ++k)
+        if (!(radii[k] > 0.0 && radii[k] <= 10.0))
+          throw b.error("radii", "radius " + formatDouble(radii[k]) + " m must be in (0, 10]");
+      body.shape = Ellipsoid::fromRpy(b.getVec3("center"), b.getVec3("rpy", Vec3::Zero()), radii);
+      c.bodies.push_back(body);
+    }
   }
   if (c.publish_rate * c.physics.substep > 1.0 + 1e-9)
     throw y.error("publish_rate", formatDouble(c.publish_rate) + " Hz is faster than one substep (" +

@@ -18,6 +18,19 @@ struct PhysicsParameters {
   double max_bend = 2.4;               ///< largest deviation of a segment from its rest direction (rad)
   bool compensate_rest_angles = true;  ///< styled shape = equilibrium under gravity at the rest pose
 
+  // Reaction constraint (8)-(10) against the body ellipsoids.
+  double collision_stiffness = 5.0;  ///< k: pushes a control point out of a body (N/m)
+  double collision_damping = 0.05;   ///< c: damps its speed into the body (N s/m)
+
+  // Springs (11) within and between strips, with a dead band between the two factors.
+  bool springs_within_strips = true;     ///< between neighbouring columns of a strip, same row
+  bool springs_between_strips = true;    ///< between control points of neighbouring strips found at rest
+  double spring_stiffness = 0.5;         ///< k_s (N/m)
+  double spring_proximity_factor = 0.6;  ///< repulsion when closer than this x rest length
+  double spring_far_factor = 1.5;        ///< attraction when further than this x rest length
+  double spring_radius = 0.02;           ///< pairs between strips: rest distance below this (m)
+  int spring_max_pairs = 3;              ///< nearest partners per control point in other strips
+
   /// Throws std::invalid_argument "PhysicsParameters: <key>: <value> <problem>" on a bad value.
   void validate() const;
 };

@@ -2,6 +2,9 @@
 /// The parameter file shared by the node and the offline runner (config/hair_sim.yaml).
 #include <string>
 
+#include <vector>
+
+#include "hair_sim/core/model/Body.hpp"
 #include "hair_sim/core/model/PhysicsParameters.hpp"
 
 namespace hair_sim {
@@ -12,6 +15,7 @@ struct SimConfig {
   double publish_rate = 30.0;  ///< Hz
   std::string hairstyle_file;  ///< absolute, resolved against the config file's folder
   PhysicsParameters physics;
+  std::vector<Body> bodies;  ///< collision ellipsoids, each in its own frame
 };
 
 /// Loads and validates; throws std::invalid_argument naming the file, key, line and value.
