@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
@@ -76,6 +78,7 @@ void Simulator::buildChains() {
   inv_inertia_.assign(sn, 0.0);
   strip_offset_.clear();
   spring_force_.assign(sn, Vec3::Zero());
+  moved_in_step_.assign(sn, -1);
   strip_of_point_.assign(sn, 0);
   margins_.clear();
   margin_of_strip_.clear();
@@ -218,6 +221,25 @@ void Simulator::buildSprings() {
       }
     }
   }
+  // Partners of each point (both directions) for the hard band in resolveCollisions.
+  const std::size_t n = positions_.size();
+  partner_start_.assign(n + 1, 0);
+  for (const SpringPair& p : springs_) {
+    ++partner_start_[static_cast<std::size_t>(p.a) + 1];
+    ++partner_start_[static_cast<std::size_t>(p.b) + 1];
+  }
+  for (std::size_t k = 0; k < n; ++k) partner_start_[k + 1] += partner_start_[k];
+  partner_index_.assign(static_cast<std::size_t>(partner_start_[n]), 0);
+  partner_rest_.assign(static_cast<std::size_t>(partner_start_[n]), 0.0);
+  std::vector<int> fill(partner_start_.begin(), partner_start_.end() - 1);
+  for (const SpringPair& p : springs_) {
+    const std::size_t fa = static_cast<std::size_t>(fill[static_cast<std::size_t>(p.a)]++);
+    partner_index_[fa] = p.b;
+    partner_rest_[fa] = p.rest;
+    const std::size_t fb = static_cast<std::size_t>(fill[static_cast<std::size_t>(p.b)]++);
+    partner_index_[fb] = p.a;
+    partner_rest_[fb] = p.rest;
+  }
 }
 
 void Simulator::computeSpringForces() {
@@ -290,8 +312,9 @@ bool segmentCrosses(const Ellipsoid& e, const Vec3& p0, const Vec3& p1) {
 
 }  // namespace
 
-Vec3 Simulator::resolveCollisions(const Vec3& pivot, double d, const Vec3& dir, const Vec3& previous_end,
-                                  const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
+Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
+                                  const Vec3& previous_end, const std::vector<Ellipsoid>& now,
+                                  const std::vector<Ellipsoid>& before) {
   const std::size_t nb = now.size();
   // Validity for one body: end outside, segment not cutting through it (pivot outside), and the end's
   // path over the substep, relative to the moving body, not entering it (the paper's ray test).
@@ -305,46 +328,126 @@ Vec3 Simulator::resolveCollisions(const Vec3& pivot, double d, const Vec3& dir, 
       return false;
     return true;
   };
-  auto validAll = [&](const Vec3& u) {
+  auto validBodies = [&](const Vec3& u) {
     for (std::size_t b = 0; b < nb; ++b)
       if (!validFor(b, u)) return false;
     return true;
   };
-  if (validAll(dir)) return dir;
-  ++collisions_;
-  // Bisection on the arc from -> to (to valid) for the valid direction closest to `from`.
-  auto bisect = [&](const Vec3& from, const Vec3& to) {
-    const Vec3 arc = rotationVectorBetween(from, to);
+  Vec3 result = dir;
+  if (!validBodies(dir)) {
+    ++collisions_;
+    result = escapeBodies(pivot, d, dir, validFor, validBodies, now);
+  }
+  // Spring band as a constraint: move the end into [proximity, far] x rest length of each partner
+  // (a few projection sweeps, the length to the pivot kept), if that keeps clear of the bodies.
+  const int p_begin = partner_start_[static_cast<std::size_t>(point)];
+  const int p_end = partner_start_[static_cast<std::size_t>(point) + 1];
+  if (p_begin == p_end) return result;
+  const double lo_f = params_.spring_proximity_factor, hi_f = params_.spring_far_factor;
+  // Projects the end of direction u into every band (sweeps); returns whether anything moved.
+  auto project = [&](Vec3& u) {
+    bool moved = false;
+    for (int sweep = 0; sweep < 8; ++sweep) {
+      bool any = false;
+      for (int q = p_begin; q < p_end; ++q) {
+        // Each pair is kept by the later of its two points in the sweep, against the final position
+        // of the earlier one: partners not yet moved in this substep keep the pair themselves.
+        const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
+        if (moved_in_step_[j] != steps_) continue;
+        const Vec3& other = positions_[j];
+        const double rest = partner_rest_[static_cast<std::size_t>(q)];
+        const Vec3 end = pivot + d * u;
+        const double dist = (end - other).norm();
+        double r;
+        if (dist < lo_f * rest)
+          r = lo_f * rest * 1.000001;
+        else if (dist > hi_f * rest)
+          r = hi_f * rest * 0.999999;
+        else
+          continue;
+        // Nearest point to `end` on the circle where the sphere |x - pivot| = d meets |x - other| = r.
+        const Vec3 po = other - pivot;
+        const double L = po.norm();
+        if (L < 1e-12) continue;
+        const Vec3 axis = po / L;
+        const double h = (d * d - r * r + L * L) / (2.0 * L);
+        if (std::abs(h) >= d) continue;  // no such circle: the band cannot be met from this pivot
+        const double rho = std::sqrt(d * d - h * h);
+        Vec3 perp = (end - pivot) - (end - pivot).dot(axis) * axis;
+        if (perp.norm() < 1e-12) perp = axis.unitOrthogonal();
+        perp.normalize();
+        // The nearest point of the circle first; if a body is in the way, the other quarter points.
+        const Vec3 side = axis.cross(perp);
+        const Vec3 options[4] = {perp, side, -side, -perp};
+        Vec3 chosen = (h * axis + rho * perp).normalized();
+        for (const Vec3& o : options) {
+          const Vec3 cand = (h * axis + rho * o).normalized();
+          if (validBodies(cand)) {
+            chosen = cand;
+            break;
+          }
+        }
+        u = chosen;
+        any = true;
+      }
+      if (!any) break;
+      moved = true;
+    }
+    return moved;
+  };
+  // Alternate between the bands and the bodies; the bodies always have the last word.
+  Vec3 u = result;
+  for (int round = 0; round < 4; ++round) {
+    if (!project(u)) return u;  // every band holds (and u is clear of the bodies, see below)
+    if (validBodies(u)) {
+      Vec3 check = u;
+      if (!project(check)) return u;
+      u = check;
+      continue;
+    }
+    u = escapeBodies(pivot, d, u, validFor, validBodies, now);
+    if (!validBodies(u)) return result;
+    result = u;
+  }
+  return validBodies(u) ? u : result;
+}
+
+template <typename ValidFor, typename ValidAll>
+Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const ValidFor& validFor,
+                             const ValidAll& validBodies, const std::vector<Ellipsoid>& now) const {
+  const std::size_t nb = now.size();
+  // Bisection on the arc dir -> to (`to` valid) for the valid direction closest to `dir`.
+  auto bisect = [&](const Vec3& to) {
+    const Vec3 arc = rotationVectorBetween(dir, to);
     double lo = 0.0, hi = 1.0;
     for (int it = 0; it < 40; ++it) {
       const double mid = 0.5 * (lo + hi);
-      if (validAll(rotateByVector(arc * mid, from)))
+      if (validBodies(rotateByVector(arc * mid, dir)))
         hi = mid;
       else
         lo = mid;
     }
-    return Vec3(rotateByVector(arc * hi, from).normalized());
+    return Vec3(rotateByVector(arc * hi, dir).normalized());
   };
   // Candidate escape directions: the outward normal at the pivot's nearest point of each violated
-  // body (pivot + d N clears a convex body), their mean (for a crevice between two bodies), and the
-  // segment's direction at the start of the substep.
-  Vec3 normals[8] = {Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(),
-                     Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ(), Vec3::UnitZ()};
+  // body (pivot + d N clears a convex body) and their mean (a crevice between two bodies).
+  Vec3 cand[8];
   int count = 0;
   Vec3 sum = Vec3::Zero();
   for (std::size_t b = 0; b < nb && count < 7; ++b) {
     if (validFor(b, dir)) continue;
-    normals[count] = now[b].closestPoint(pivot).normal;
-    sum += normals[count++];
+    cand[count] = now[b].closestPoint(pivot).normal;
+    sum += cand[count++];
   }
-  if (count > 1 && sum.norm() > 1e-9) normals[count++] = sum.normalized();
+  if (count == 0) return dir;
+  if (count > 1 && sum.norm() > 1e-9) cand[count++] = sum.normalized();
   for (int c = 0; c < count; ++c)
-    if (validAll(normals[c])) return bisect(dir, normals[c]);
+    if (validBodies(cand[c])) return bisect(cand[c]);
   // No single escape clears every body (a pinch between overlapping bodies): search the sphere of
-  // directions around the pivot for the one with the smallest worst penetration.
-  Vec3 best = normals[count > 1 ? count - 1 : 0];
+  // directions around the pivot for a valid one, else the one with the smallest worst penetration.
+  const Vec3 base = cand[count - 1];
+  Vec3 best = base;
   double best_depth = 1e300;
-  const Vec3 base = count > 1 ? normals[count - 1] : normals[0];
   const Vec3 t1 = base.unitOrthogonal(), t2 = base.cross(t1);
   for (int ring = 0; ring <= 12; ++ring) {
     const double polar = 3.14159265358979 * ring / 12.0;
@@ -352,7 +455,7 @@ Vec3 Simulator::resolveCollisions(const Vec3& pivot, double d, const Vec3& dir, 
     for (int j = 0; j < around; ++j) {
       const double az = 2.0 * 3.14159265358979 * j / around;
       const Vec3 u = std::cos(polar) * base + std::sin(polar) * (std::cos(az) * t1 + std::sin(az) * t2);
-      if (validAll(u)) return bisect(dir, u);
+      if (validBodies(u)) return bisect(u);
       double worst = 0.0;
       for (std::size_t b = 0; b < nb; ++b)
         worst = std::max(worst, std::max(0.0, -now[b].implicitValue(pivot + d * u)));
@@ -462,8 +565,9 @@ void Simulator::step(const StepInputs& in) {
         const double bend_angle = bend.norm();
         if (bend_angle > params_.max_bend)
           next = rotateByVector(bend * (params_.max_bend / bend_angle), rest);
-        if (!bodies_now.empty()) {
-          next = resolveCollisions(pivot, d, next, positions_[i], bodies_now, bodies_before);
+        if (!bodies_now.empty() || partner_start_[i + 1] > partner_start_[i]) {
+          next = resolveCollisions(static_cast<int>(i), pivot, d, next, positions_[i], bodies_now,
+                                   bodies_before);
           const Vec3 end = pivot + d * next;
           for (const Ellipsoid& e : bodies_now)
             if (e.contains(end))
@@ -474,6 +578,7 @@ void Simulator::step(const StepInputs& in) {
         rate_[i] = w;
         direction_[i] = next;
         positions_[i] = pivot + d * next;
+        moved_in_step_[i] = steps_;
         const Vec3 mid_next = pivot + 0.5 * d * next;
         velocity_[i] = (mid_next - previous_mid_[i]) / dt;
         previous_mid_[i] = mid_next;

@@ -29,6 +29,8 @@
 /// between strips (control points closer than a radius at rest, found through a uniform grid, the
 /// nearest few per point) pull or push along the pair with k_s times the stretch outside the band
 /// [proximity_factor, far_factor] x rest length; their force joins F before the projection (5).
+/// The band is also kept as a constraint on each new end point (bodies take precedence), so strips
+/// never come closer than proximity_factor x rest length nor spread wider than far_factor x it.
 #include <vector>
 
 #include "hair_sim/core/dynamics/HeadState.hpp"
@@ -107,8 +109,12 @@ class Simulator {
   void buildChains();
   void buildSprings();
   void computeSpringForces();
+  /// The valid direction nearest to dir (bisection toward an escape direction) for the bodies.
+  template <typename ValidFor, typename ValidAll>
+  Vec3 escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const ValidFor& valid_for,
+                    const ValidAll& valid_all, const std::vector<Ellipsoid>& now) const;
   /// Turns the segment pivot -> pivot + d * dir out of the bodies; returns the corrected direction.
-  Vec3 resolveCollisions(const Vec3& pivot, double d, const Vec3& dir, const Vec3& previous_end,
+  Vec3 resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir, const Vec3& previous_end,
                          const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
 
   Hairstyle hairstyle_;
@@ -132,6 +138,10 @@ class Simulator {
   std::vector<double> margins_;       ///< distinct thickness margins
   std::vector<Body> bodies_;
   std::vector<SpringPair> springs_;
+  std::vector<long> moved_in_step_;  ///< step number in which a point got its final position
+  std::vector<int> partner_start_;   ///< CSR: partners of point k are [start[k], start[k+1])
+  std::vector<int> partner_index_;
+  std::vector<double> partner_rest_;
   // Bodies in the head frame, per distinct margin, now and at the previous substep.
   std::vector<std::vector<Ellipsoid>> bodies_now_;
   std::vector<std::vector<Ellipsoid>> bodies_before_;

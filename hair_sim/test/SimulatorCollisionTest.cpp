@@ -1,0 +1,219 @@
+/// Body ellipsoids (8)-(10), the no-tunnelling guarantee and the springs (11) inside the Simulator.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+
+#include "TestUtil.hpp"
+#include "hair_sim/core/Simulator.hpp"
+#include "hair_sim/core/model/HairstyleIO.hpp"
+#include "hair_sim/core/model/SimConfig.hpp"
+#include "hair_sim/tools/OfflineRunner.hpp"
+
+namespace hair_sim {
+namespace {
+
+PhysicsParameters quiet() {
+  PhysicsParameters p;
+  p.hinge_stiffness = 0.0;
+  p.hinge_damping = 1e-7;
+  p.compensate_rest_angles = false;
+  p.springs_between_strips = false;
+  p.springs_within_strips = false;
+  return p;
+}
+
+Body worldBody(const std::string& name, const Vec3& center, const Vec3& radii) {
+  return Body{name, "world", Ellipsoid(center, Mat3::Identity(), radii)};
+}
+
+/// Largest distance any control point moved in one substep (m), head frame.
+double maxStep(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+  return worst;
+}
+
+TEST(SimulatorCollisionTest, FastPointIsStoppedOnTheNearSideOfAThinBody) {
+  // A long chain hanging from the top of a 0.1 m sphere, blown sideways (+y) by a 1000 m/s gust with
+  // a large step bound, so its lower points cross y = 0.06 at 50 m/s or more within one substep.
+  PhysicsParameters p = quiet();
+  p.max_angle_step = 1.5;
+  p.air_drag = 0.05;
+  const Hairstyle style = test::hangingStrip(2, 5, 0.15, 0.0);
+  const Body slab =
+      worldBody("slab", Vec3(0.0, 0.06, -0.2), Vec3(0.6, 0.01, 0.6));  // thin in y, spans the chain
+  StepInputs in;
+  in.wind = Vec3(0.0, 1000.0, 0.0);
+  // Without the slab: how fast do the points cross its plane?
+  Simulator free_sim(style, p);
+  double fastest = 0.0;
+  for (int i = 0; i < 30; ++i) {
+    const std::vector<Vec3> before = free_sim.positionsHead();
+    free_sim.step(in);
+    for (std::size_t k = 2; k < before.size(); ++k)
+      if (before[k].y() < 0.06 && free_sim.positionsHead()[k].y() > 0.06 &&
+          free_sim.positionsHead()[k].z() < -0.05)
+        fastest = std::max(fastest, (free_sim.positionsHead()[k] - before[k]).norm() / p.substep);
+  }
+  ASSERT_GE(fastest, 50.0) << "the set-up must drive points through the slab at >= 50 m/s";
+  // With the slab: every point below the roots stays on the near side, outside the inflated slab.
+  Simulator sim(style, p, {slab});
+  in.body_frames = {Iso3::Identity()};
+  const Ellipsoid inflated = slab.shape.inflated(style.strips[0].thickness_margin);
+  for (int i = 0; i < 60; ++i) {
+    sim.step(in);
+    const std::vector<Vec3>& x = sim.positionsHead();
+    for (std::size_t k = 2; k < x.size(); ++k) {
+      EXPECT_LT(x[k].y(), 0.06) << "point " << k << " went through at step " << i;
+      EXPECT_FALSE(inflated.contains(x[k])) << "point " << k << " at step " << i;
+    }
+    EXPECT_EQ(sim.maxPenetration(), 0.0);
+  }
+}
+
+TEST(SimulatorCollisionTest, ReactionConstraintHoldsHairOnABodyWithoutPenetration) {
+  // Hair resting on a sphere below it: gravity presses the points onto the inflated surface.
+  PhysicsParameters p = quiet();
+  p.hinge_damping = 1e-6;
+  const Hairstyle style = test::hangingStrip(2, 5, 0.05, 0.3);
+  const Body ball = worldBody("ball", Vec3(0.0, 0.02, -0.15), Vec3(0.08, 0.08, 0.08));
+  Simulator sim(style, p, {ball});
+  StepInputs in;
+  in.body_frames = {Iso3::Identity()};
+  for (int i = 0; i < 240 * 3; ++i) {
+    sim.step(in);
+    ASSERT_EQ(sim.maxPenetration(), 0.0) << "step " << i;
+  }
+  // The hair drapes: some point lies on the inflated surface (within 1 mm), none inside.
+  const Ellipsoid inflated = ball.shape.inflated(style.strips[0].thickness_margin);
+  double nearest = 1.0;
+  for (std::size_t k = 2; k < sim.positionsHead().size(); ++k)
+    nearest = std::min(nearest, std::abs(inflated.closestPoint(sim.positionsHead()[k]).signed_distance));
+  EXPECT_LT(nearest, 1e-3);
+}
+
+SimConfig defaultConfig() { return loadSimConfig(test::repoPath("config/hair_sim.yaml")); }
+
+TEST(SimulatorCollisionTest, ViolentHeadShakeWithWindOntoHeadAndShouldersNeverPenetrates) {
+  const SimConfig config = defaultConfig();
+  ASSERT_GE(config.bodies.size(), 5u);
+  Scenario scenario = Scenario::load(test::repoPath("config/scenarios/violent_shake.yaml"));
+  // Wind from the front and above blows the hair back and down onto the head, neck and shoulders.
+  scenario.wind = {{0.0, Vec3::Zero()}, {0.5, Vec3(-3.0, 0.0, -2.0)}};
+  OfflineRunner runner(config, loadHairstyle(config.hairstyle_file), scenario);
+  const RunSummary summary = runner.run(nullptr);
+  EXPECT_TRUE(summary.all_finite);
+  EXPECT_GT(summary.collisions, 1000) << "the hair must actually be thrown onto the bodies";
+  EXPECT_LE(summary.max_penetration_m, 1e-9);
+}
+
+TEST(SimulatorCollisionTest, StripsPushedTogetherKeepProximityTimesRestLength) {
+  // Two strips side by side; a wall keeps strip A in place while the wind pushes strip B onto it.
+  PhysicsParameters p = quiet();
+  p.springs_between_strips = true;
+  p.springs_within_strips = true;
+  p.spring_radius = 0.02;
+  // Four parallel columns 1 cm apart split into strip A (y = -0.015, -0.005) and B (0.005, 0.015).
+  const Hairstyle four = test::hangingStrip(4, 5, 0.05, 0.0, 0.01);
+  Hairstyle a = four;
+  a.strips.assign(2, four.strips[0]);
+  for (int s = 0; s < 2; ++s) {
+    Strip& st = a.strips[static_cast<std::size_t>(s)];
+    st.columns = 2;
+    st.points.clear();
+    for (int r = 0; r < 5; ++r)
+      for (int c = 0; c < 2; ++c) st.points.push_back(four.strips[0].point(r, 2 * s + c));
+  }
+  const Body wall =
+      worldBody("wall", Vec3(0.0, -0.5, -0.05), Vec3(0.5, 0.479, 0.8));  // nearly flat at y = -0.021
+  Simulator sim(a, p, {wall});
+  ASSERT_FALSE(sim.springs().empty());
+  StepInputs in;
+  in.wind = Vec3(0.0, -8.0, 0.0);
+  in.body_frames = {Iso3::Identity()};
+  double min_between = 1e9, min_within = 1e9, max_within = 0.0;
+  for (int i = 0; i < 240 * 4; ++i) {
+    sim.step(in);
+    const std::vector<Vec3>& x = sim.positionsHead();
+    for (const SpringPair& s : sim.springs()) {
+      const double ratio =
+          (x[static_cast<std::size_t>(s.a)] - x[static_cast<std::size_t>(s.b)]).norm() / s.rest;
+      if (s.within_strip) {
+        min_within = std::min(min_within, ratio);
+        max_within = std::max(max_within, ratio);
+      } else {
+        min_between = std::min(min_between, ratio);
+      }
+    }
+  }
+  EXPECT_GE(min_between, p.spring_proximity_factor - 1e-9);
+  EXPECT_GE(min_within, p.spring_proximity_factor - 1e-9);
+  EXPECT_LE(max_within, p.spring_far_factor + 1e-9);
+  // They were really pushed together (the band's lower edge was reached).
+  EXPECT_LT(min_between, 0.9);
+}
+
+TEST(SimulatorCollisionTest, SpringForceFollowsEquation11OutsideTheBandOnly) {
+  PhysicsParameters p = quiet();
+  p.gravity.setZero();
+  p.springs_within_strips = true;
+  p.spring_stiffness = 2.0;
+  Simulator sim(test::hangingStrip(2, 4, 0.05, 0.0, 0.02), p);
+  ASSERT_EQ(sim.springs().size(), 3u);  // rows 1..3, one pair each
+  // Inside the band nothing happens: a still strip at rest stays exactly at rest.
+  StepInputs in;
+  sim.step(in);
+  for (std::size_t k = 0; k < sim.positionsHead().size(); ++k)
+    EXPECT_EQ(sim.positionsHead()[k], (test::hangingStrip(2, 4, 0.05, 0.0, 0.02).strips[0].points[k]));
+}
+
+TEST(SimulatorCollisionTest, SpringPairsBetweenStripsScaleLinearly) {
+  // The grid pairs each point with at most spring_max_pairs partners: the count per strip is bounded.
+  const SimConfig config = defaultConfig();
+  Simulator sim(loadHairstyle(config.hairstyle_file), config.physics, config.bodies);
+  int between = 0;
+  for (const SpringPair& s : sim.springs()) between += s.within_strip ? 0 : 1;
+  EXPECT_GT(between, 100);
+  EXPECT_LE(between, sim.controlPointCount() * config.physics.spring_max_pairs);
+}
+
+TEST(SimulatorCollisionTest, BodyFramesMustMatchTheBodies) {
+  const SimConfig config = defaultConfig();
+  Simulator sim(loadHairstyle(config.hairstyle_file), config.physics, config.bodies);
+  StepInputs in;  // no body frames for 5 bodies
+  const std::string m = test::errorOf([&] { sim.step(in); });
+  EXPECT_NE(m.find("0 body frame poses for 5 bodies"), std::string::npos) << m;
+}
+
+TEST(SimulatorCollisionTest, BadBodiesInTheConfigAreNamed) {
+  std::ifstream in(test::repoPath("config/hair_sim.yaml"));
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  struct Case {
+    const char* from;
+    const char* to;
+    const char* key;
+    const char* value;
+  } cases[] = {
+      {"radii: [0.05, 0.05, 0.09]", "radii: [0.05, 0.0, 0.09]", "bodies[1].radii", "radius 0"},
+      {"name: neck", "name: head", "bodies[1].name", "'head' is used by two bodies"},
+      {"frame: world, center: [-0.01", "frame: '', center: [-0.01", "bodies[1].frame", "valid tf frame"},
+      {"center: [-0.01, 0.0, 1.45]", "center: [-0.01, 1.45]", "bodies[1].center", "[-0.01, 1.45]"},
+      {"stiffness: 5.0", "stiffness: -5.0", "collision.stiffness", "-5"},
+      {"proximity_factor: 0.6", "proximity_factor: 1.6", "springs.proximity_factor", "1.6"},
+  };
+  for (const Case& c : cases) {
+    std::string text = good;
+    const std::size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, std::strlen(c.from), c.to);
+    const std::string path = test::writeTemp("bodies.yaml", text);
+    const std::string m = test::errorOf([&] { loadSimConfig(path); });
+    EXPECT_NE(m.find(c.key), std::string::npos) << m;
+    EXPECT_NE(m.find(c.value), std::string::npos) << m;
+  }
+}
+
+}  // namespace
+}  // namespace hair_sim
