@@ -224,9 +224,11 @@ TEST(SimulatorTest, ContinuousTumbleStaysFiniteAndKeepsSegmentLengths) {
       }
     offset += s.pointCount();
   }
-  // Relative to the head a segment turns at most at the head's rate plus what the hinge and gravity
-  // alone give it (see the grid test); the tumble adds centrifugal energy, so allow 2x the spin.
-  EXPECT_LT(worst_rate, 2.0 * spin.norm() + 60.0);
+  // No flip or spin: no segment turns by a quarter turn or more within one substep (the dynamics
+  // alone are clamped to max_angle_step; the spring band and collision corrections come on top).
+  EXPECT_LT(worst_rate * dt, 0.5 * kPi);
+  std::printf("tumble: largest segment rate %.1f rad/s (%.3f rad per substep)\n", worst_rate,
+              worst_rate * dt);
 }
 
 TEST(SimulatorTest, IdenticalInputsGiveBitIdenticalResults) {

@@ -235,10 +235,10 @@ void Simulator::buildSprings() {
   for (const SpringPair& p : springs_) {
     const std::size_t fa = static_cast<std::size_t>(fill[static_cast<std::size_t>(p.a)]++);
     partner_index_[fa] = p.b;
-    partner_rest_[fa] = p.rest;
+    partner_rest_[fa] = p.within_strip ? p.rest : -p.rest;  // negative: between strips
     const std::size_t fb = static_cast<std::size_t>(fill[static_cast<std::size_t>(p.b)]++);
     partner_index_[fb] = p.a;
-    partner_rest_[fb] = p.rest;
+    partner_rest_[fb] = p.within_strip ? p.rest : -p.rest;
   }
 }
 
@@ -355,16 +355,20 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
         const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
         if (moved_in_step_[j] != steps_) continue;
         const Vec3& other = positions_[j];
-        const double rest = partner_rest_[static_cast<std::size_t>(q)];
+        const double signed_rest = partner_rest_[static_cast<std::size_t>(q)];
+        const double rest = std::abs(signed_rest);
+        const bool within = signed_rest > 0.0;
         const Vec3 end = pivot + d * u;
         const double dist = (end - other).norm();
         double r;
-        if (dist < lo_f * rest)
+        if (dist < lo_f * rest) {
           r = lo_f * rest * 1.000001;
-        else if (dist > hi_f * rest)
+        } else if (within && dist > hi_f * rest) {
+          // A strip's width stays within the band; between strips only the spring force attracts.
           r = hi_f * rest * 0.999999;
-        else
+        } else {
           continue;
+        }
         // Nearest point to `end` on the circle where the sphere |x - pivot| = d meets |x - other| = r.
         const Vec3 po = other - pivot;
         const double L = po.norm();
@@ -395,21 +399,19 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
     }
     return moved;
   };
-  // Alternate between the bands and the bodies; the bodies always have the last word.
-  Vec3 u = result;
+  // Alternate between the bands and the bodies; the bodies always have the last word (every
+  // direction returned is clear of them).
+  Vec3 u = result;  // clear of the bodies
   for (int round = 0; round < 4; ++round) {
-    if (!project(u)) return u;  // every band holds (and u is clear of the bodies, see below)
-    if (validBodies(u)) {
-      Vec3 check = u;
-      if (!project(check)) return u;
-      u = check;
-      continue;
+    Vec3 p = u;
+    if (!project(p)) break;  // every band holds
+    if (!validBodies(p)) {
+      p = escapeBodies(pivot, d, p, validFor, validBodies, now);
+      if (!validBodies(p)) break;
     }
-    u = escapeBodies(pivot, d, u, validFor, validBodies, now);
-    if (!validBodies(u)) return result;
-    result = u;
+    u = p;
   }
-  return validBodies(u) ? u : result;
+  return u;
 }
 
 template <typename ValidFor, typename ValidAll>
