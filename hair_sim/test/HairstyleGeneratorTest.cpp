@@ -53,9 +53,10 @@ TEST(HairstyleGeneratorTest, PartingSendsHairAwayFromItOnTop) {
   const Hairstyle h = generateHairstyle(kScalp, o);
   int away = 0, total = 0;
   for (const Strip& s : h.strips) {
-    const Vec3& root = s.point(0, 0);
+    // The whole strip falls to the side of the parting its root centre is on.
+    const Vec3 root = 0.5 * (s.point(0, 0) + s.point(0, s.columns - 1));
     if (root.z() < 0.08) continue;  // the top of the head only
-    const Vec3& tip = s.point(s.rows - 1, 0);
+    const Vec3 tip = 0.5 * (s.point(s.rows - 1, 0) + s.point(s.rows - 1, s.columns - 1));
     ++total;
     if ((root.y() >= o.parting_y) == (tip.y() > root.y())) ++away;
   }

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -18,6 +19,9 @@ std::string RunSummary::toJson() const {
     << ", \"max_segment_rate\": " << formatDouble(max_segment_rate)
     << ", \"max_penetration_m\": " << formatDouble(max_penetration_m)
     << ", \"min_strip_gap_m\": " << formatDouble(min_strip_gap_m) << ", \"collisions\": " << collisions
+    << ", \"max_mesh_penetration_m\": " << formatDouble(max_mesh_penetration_m)
+    << ", \"mesh_vertices_projected\": " << mesh_vertices_projected
+    << ", \"mesh_vertices\": " << mesh_vertices << ", \"mesh_triangles\": " << mesh_triangles
     << ", \"all_finite\": " << (all_finite ? "true" : "false") << "}";
   return o.str();
 }
@@ -40,7 +44,8 @@ std::vector<Iso3> OfflineRunner::bodyFrames(const Iso3& head_pose) const {
   return frames;
 }
 
-RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_frame) {
+RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_frame,
+                              const RunOptions& options) {
   const double dt = config_.physics.substep;
   simulator_.reset();
   HeadMotionEstimator head;
@@ -52,6 +57,8 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
   const long frames = static_cast<long>(std::floor(scenario_.duration * scenario_.output_rate + 1e-9));
   long n = 0;  // substeps done; the state is at time n * dt
   double stepping_seconds = 0.0;
+  std::unique_ptr<HairMeshBuilder> meshes;
+  if (options.build_meshes) meshes = std::make_unique<HairMeshBuilder>(simulator_.hairstyle(), options.mesh);
   for (long f = 0; f <= frames; ++f) {
     const double t_frame = static_cast<double>(f) / scenario_.output_rate;
     const auto start = std::chrono::steady_clock::now();
@@ -73,12 +80,26 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
     stepping_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     simulator_.positionsWorld(head.state().pose, world);
     for (const Vec3& p : world) summary.all_finite = summary.all_finite && p.allFinite();
+    if (meshes) {
+      const Iso3& pose = head.state().pose;
+      const std::vector<Iso3> frames = bodyFrames(pose);
+      std::vector<Ellipsoid> bodies;
+      for (std::size_t b = 0; b < config_.bodies.size(); ++b)
+        bodies.push_back(config_.bodies[b].shape.transformed(frames[b]));
+      meshes->build(world, simulator_.stripOffsets(), simulator_.hairstyle().scalp.transformed(pose), bodies);
+      summary.mesh_vertices_projected += meshes->projectedVertices();
+      summary.max_mesh_penetration_m =
+          std::max(summary.max_mesh_penetration_m, meshes->maxPenetration(bodies));
+      summary.mesh_vertices = meshes->vertexCount();
+      summary.mesh_triangles = meshes->triangleCount();
+    }
     if (on_frame) {
       OutputFrame frame;
       frame.t = t_frame;
       frame.head_pose = head.state().pose;
       frame.points_world = &world;
       frame.simulator = &simulator_;
+      frame.meshes = meshes.get();
       on_frame(frame);
     }
     ++summary.output_frames;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "hair_sim/core/Simulator.hpp"
+#include "hair_sim/core/geometry/HairMeshBuilder.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
 #include "hair_sim/tools/Scenario.hpp"
 
@@ -23,6 +24,11 @@ struct RunSummary {
   double max_penetration_m = 0.0;  ///< deepest control point inside an inflated body over the run
   double min_strip_gap_m = 0.0;    ///< smallest distance between paired points of different strips
   long collisions = 0;             ///< segments turned out of a body, summed over the run
+  double max_mesh_penetration_m =
+      0.0;                           ///< deepest mesh vertex inside a body (no margin), when meshes are built
+  long mesh_vertices = 0;            ///< per frame, when meshes are built
+  long mesh_vertices_projected = 0;  ///< mesh vertices moved out of a body, summed over the frames
+  long mesh_triangles = 0;           ///< per frame (single-sided), when meshes are built
   bool all_finite = true;
 
   std::string toJson() const;
@@ -34,6 +40,13 @@ struct OutputFrame {
   Iso3 head_pose = Iso3::Identity();
   const std::vector<Vec3>* points_world = nullptr;
   const Simulator* simulator = nullptr;
+  /// Tessellated strips in the world frame (only when RunOptions::build_meshes).
+  const HairMeshBuilder* meshes = nullptr;
+};
+
+struct RunOptions {
+  bool build_meshes = false;  ///< tessellate every output frame (for PLY output and mesh checks)
+  HairMeshOptions mesh;
 };
 
 class OfflineRunner {
@@ -45,7 +58,8 @@ class OfflineRunner {
   /// Steps the whole scenario; calls on_frame at t = 0, 1/output_rate, ... <= duration. A frame at t
   /// shows the state after the last substep whose time is <= t (within 1e-9 s), so output rates that
   /// divide the substep rate see identical states.
-  RunSummary run(const std::function<void(const OutputFrame&)>& on_frame);
+  RunSummary run(const std::function<void(const OutputFrame&)>& on_frame,
+                 const RunOptions& options = RunOptions{});
   const Simulator& simulator() const { return simulator_; }
 
  private:

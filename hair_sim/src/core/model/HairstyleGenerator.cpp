@@ -104,13 +104,15 @@ Hairstyle generateHairstyle(const Ellipsoid& scalp, const GeneratorOptions& o,
                      std::min(1.f, o.color.b * shade), o.color.a};
       s.points.resize(static_cast<std::size_t>(s.pointCount()));
       const double d = s.hair_length / (s.rows - 1);
+      const double strip_side =
+          (scalpPoint(scalp, alpha, beta).y() - scalp.center().y() >= o.parting_y) ? 1.0 : -1.0;
       for (int c = 0; c < s.columns; ++c) {
         const double b = beta + dbeta * (static_cast<double>(c) / (s.columns - 1) - 0.5);
         const Vec3 root = scalpPoint(scalp, alpha, b);
         const Vec3 normal = scalp.normalAt(root);
         s.point(0, c) = root;
         // Flow: down, away from the parting, a little backwards on top; the first segment leaves the scalp.
-        const double side = (root.y() - scalp.center().y() >= o.parting_y) ? 1.0 : -1.0;
+        const double side = strip_side;  // the whole strip falls to one side of the parting
         const double top = std::max(0.0, (root - scalp.center()).z() / scalp.radii().z());
         Vec3 flow(-0.25 * top, 0.55 * side * top, -1.0);
         flow.normalize();

@@ -1,0 +1,53 @@
+/// BM_Step/<strips>: one substep of the full core (gravity, head motion, wind, springs, the 5 default
+/// bodies) on strips of 2 x 5 control points; items = control-point updates.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "hair_sim/core/Simulator.hpp"
+#include "hair_sim/core/model/HairstyleGenerator.hpp"
+#include "hair_sim/core/model/SimConfig.hpp"
+#include "hair_sim/tools/OfflineRunner.hpp"
+
+namespace {
+
+using namespace hair_sim;
+
+void BM_Step(benchmark::State& state) {
+  const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
+  GeneratorOptions options;
+  options.strips = static_cast<int>(state.range(0));
+  options.rings = std::max(5, static_cast<int>(std::sqrt(options.strips / 4.0)));
+  Iso3 rest = Iso3::Identity();
+  rest.translation() = Vec3(0.0, 0.0, 1.6);
+  Ellipsoid scalp;
+  std::vector<Ellipsoid> obstacles;
+  for (const Body& b : config.bodies) {
+    if (b.name == "head")
+      scalp = b.shape;
+    else
+      obstacles.push_back(b.frame == config.head_frame ? b.shape : b.shape.transformed(rest.inverse()));
+  }
+  Simulator sim(generateHairstyle(scalp, options, obstacles), config.physics, config.bodies);
+  HeadMotionEstimator head;
+  head.reset(rest);
+  const double dt = config.physics.substep;
+  long n = 0;
+  for (auto _ : state) {
+    ++n;
+    Iso3 pose = rest;
+    pose.linear() = rotationFromRpy(Vec3(0.0, 0.2 * std::sin(3.0 * n * dt), 0.6 * std::sin(2.0 * n * dt)));
+    StepInputs in;
+    in.head = head.update(pose, dt);
+    in.wind = Vec3(1.5, 1.0, 0.0);
+    for (const Body& b : config.bodies)
+      in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
+    sim.step(in);
+  }
+  state.SetItemsProcessed(state.iterations() * sim.controlPointCount());
+  state.counters["control_points"] = sim.controlPointCount();
+  state.counters["strips"] = static_cast<double>(sim.hairstyle().strips.size());
+}
+BENCHMARK(BM_Step)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
+
+}  // namespace

@@ -1,0 +1,78 @@
+#pragma once
+/// ROS glue of hair_sim: parameters, the head pose through tf2, wind commands, the fixed-step loop,
+/// markers and state out, the reset service. The physics lives in the ROS-free core.
+#include <hair_sim_msgs/Reset.h>
+#include <hair_sim_msgs/Wind.h>
+#include <ros/ros.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hair_sim/core/Simulator.hpp"
+#include "hair_sim/core/geometry/HairMeshBuilder.hpp"
+#include "hair_sim/core/model/SimConfig.hpp"
+
+namespace hair_sim {
+
+class HairSimNode {
+ public:
+  /// Reads the parameters and the config file; throws std::invalid_argument naming the parameter or
+  /// key and value when one is bad.
+  HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
+
+ private:
+  enum class RenderMode { Mesh, Strands, Both };
+
+  void readParameters();
+  void rebuild(Hairstyle hairstyle);
+  void onTimer(const ros::TimerEvent& event);
+  void onWind(const hair_sim_msgs::Wind::ConstPtr& msg);
+  bool onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response);
+  /// The one place that asks tf: pose of `frame` in world_frame at `stamp`; on failure warns at most
+  /// every few seconds (naming both frames and tf's reason) and returns false.
+  bool lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose);
+  Vec3 windAt(double t) const;
+  void publishOutputs(const ros::Time& stamp);
+  void publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames);
+
+  ros::NodeHandle nh_, pnh_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  ros::Subscriber wind_sub_;
+  ros::Publisher markers_pub_, bodies_pub_, state_pub_;
+  ros::ServiceServer reset_srv_;
+  ros::Timer timer_;
+
+  std::string config_file_;
+  SimConfig config_;
+  RenderMode render_mode_ = RenderMode::Mesh;
+  HairMeshOptions mesh_options_;
+  int max_substeps_per_update_ = 60;
+  int strands_per_strip_ = 6;
+
+  std::unique_ptr<Simulator> simulator_;
+  std::unique_ptr<HairMeshBuilder> meshes_;
+  HeadMotionEstimator head_;
+  bool started_ = false;
+  ros::Time sim_time_;
+  std::vector<Iso3> last_body_frames_;
+  std::vector<Vec3> world_points_;
+
+  // Wind: blends from wind_from_ to wind_to_ over [wind_start_, wind_start_ + wind_ramp_] (sim seconds).
+  Vec3 wind_from_ = Vec3::Zero();
+  Vec3 wind_to_ = Vec3::Zero();
+  double wind_start_ = 0.0;
+  double wind_ramp_ = 0.0;
+  double turbulence_ = 0.0;
+
+  // Status.
+  ros::WallTime status_since_;
+  long status_steps_ = 0;
+  double status_step_seconds_ = 0.0;
+  long status_publishes_ = 0;
+};
+
+}  // namespace hair_sim
