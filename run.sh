@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# hair_sim: set up, build and run. Usage: ./run.sh demo | test | bench | build
+# hair_sim: set up, build and run. Usage: ./run.sh demo | test | bench [flags] | build
 # Installs what it needs with apt (as root, or through sudo) on a fresh Debian 12 machine.
 set -eo pipefail
 cd "$(dirname "$(readlink -f "$0")")"
@@ -50,6 +50,15 @@ case "$cmd" in
     "$bin" --config config/hair_sim.yaml --scenario config/scenarios/head_shake.yaml \
       --out build/demo/control_points.csv --poses-out build/demo/head_poses.csv
     ;;
+  bench)
+    install_deps
+    mkdir -p build-release
+    cmake -S . -B build-release -DCMAKE_BUILD_TYPE=Release -DCATKIN_DEVEL_PREFIX="$ROOT/build-release/devel" \
+      -DCATKIN_ENABLE_TESTING=OFF >build-release/cmake.log 2>&1
+    cmake --build build-release -j"$(nproc)" --target hair_sim_bench
+    build-release/devel/lib/hair_sim/hair_sim_bench --benchmark_repetitions="${REPETITIONS:-3}" \
+      --benchmark_report_aggregates_only=true "${@:2}"
+    ;;
   test)
     install_deps
     build
@@ -57,7 +66,7 @@ case "$cmd" in
     cd build && ctest --output-on-failure -j"$(nproc)"
     ;;
   *)
-    echo "usage: ./run.sh demo | test | build" >&2
+    echo "usage: ./run.sh demo | test | bench [benchmark flags] | build" >&2
     exit 2
     ;;
 esac

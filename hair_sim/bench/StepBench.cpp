@@ -13,11 +13,10 @@ namespace {
 
 using namespace hair_sim;
 
-void BM_Step(benchmark::State& state) {
-  const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
+Hairstyle benchHairstyle(const SimConfig& config, int strips) {
   GeneratorOptions options;
-  options.strips = static_cast<int>(state.range(0));
-  options.rings = std::max(5, static_cast<int>(std::sqrt(options.strips / 4.0)));
+  options.strips = strips;
+  options.rings = std::max(5, static_cast<int>(std::sqrt(strips / 4.0)));
   Iso3 rest = Iso3::Identity();
   rest.translation() = Vec3(0.0, 0.0, 1.6);
   Ellipsoid scalp;
@@ -28,7 +27,26 @@ void BM_Step(benchmark::State& state) {
     else
       obstacles.push_back(b.frame == config.head_frame ? b.shape : b.shape.transformed(rest.inverse()));
   }
-  Simulator sim(generateHairstyle(scalp, options, obstacles), config.physics, config.bodies);
+  return generateHairstyle(scalp, options, obstacles);
+}
+
+/// Simulator set-up (chains, rest compensation, spring pairs through the grid); items = strips.
+void BM_Setup(benchmark::State& state) {
+  const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
+  const Hairstyle style = benchHairstyle(config, static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    Simulator sim(style, config.physics, config.bodies);
+    benchmark::DoNotOptimize(sim.springs().size());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<long>(style.strips.size()));
+}
+BENCHMARK(BM_Setup)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
+
+void BM_Step(benchmark::State& state) {
+  const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
+  Iso3 rest = Iso3::Identity();
+  rest.translation() = Vec3(0.0, 0.0, 1.6);
+  Simulator sim(benchHairstyle(config, static_cast<int>(state.range(0))), config.physics, config.bodies);
   HeadMotionEstimator head;
   head.reset(rest);
   const double dt = config.physics.substep;
