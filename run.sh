@@ -12,7 +12,7 @@ export ROS_HOME=$ROOT/build/ros_home ROS_LOG_DIR=$ROOT/build/ros_home/log
 PACKAGES="build-essential cmake catkin ros-core-dev rosbash python3-rostest librostest-dev libgtest-dev
   libeigen3-dev libyaml-cpp-dev libtf2-ros-dev libtf2-eigen-dev libvisualization-msgs-dev
   libgeometry-msgs-dev libstd-srvs-dev python3-geometry-msgs python3-visualization-msgs python3-std-srvs
-  libbenchmark-dev"
+  libbenchmark-dev rviz xvfb imagemagick python3-tf2-ros python3-yaml"
 
 install_deps() {
   local missing=()
@@ -44,11 +44,16 @@ case "$cmd" in
   demo)
     install_deps
     build
-    bin=build/devel/lib/hair_sim/hair_sim_offline
+    exec scripts/demo.sh
+    ;;
+  offline-demo)
+    install_deps
+    build
     echo "run.sh: offline runner, default hairstyle, head-shake scenario -> build/demo/" >&2
     mkdir -p build/demo
-    "$bin" --config config/hair_sim.yaml --scenario config/scenarios/head_shake.yaml \
-      --out build/demo/control_points.csv --poses-out build/demo/head_poses.csv
+    build/devel/lib/hair_sim/hair_sim_offline --config config/hair_sim.yaml \
+      --scenario config/scenarios/head_shake.yaml --out build/demo/control_points.csv \
+      --poses-out build/demo/head_poses.csv --mesh-out build/demo/meshes
     ;;
   bench)
     install_deps
@@ -66,7 +71,7 @@ case "$cmd" in
     cd build && ctest --output-on-failure -j"$(nproc)"
     ;;
   *)
-    echo "usage: ./run.sh demo | test | bench [benchmark flags] | build" >&2
+    echo "usage: ./run.sh demo | test | offline-demo | bench [benchmark flags] | build" >&2
     exit 2
     ;;
 esac
