@@ -104,6 +104,11 @@ void HairSimNode::readParameters() {
   pnh_.getParam("max_substeps_per_update", max_substeps_per_update_);
   if (max_substeps_per_update_ < 1)
     throw badParam("max_substeps_per_update", std::to_string(max_substeps_per_update_), "must be >= 1");
+  double smoothing = 0.02;
+  pnh_.getParam("head_smoothing", smoothing);
+  if (!(std::isfinite(smoothing) && smoothing >= 0.0 && smoothing <= 1.0))
+    throw badParam("head_smoothing", formatDouble(smoothing), "must be in [0, 1] s");
+  head_ = HeadMotionEstimator(smoothing);
   pnh_.getParam("strands_per_strip", strands_per_strip_);
   if (strands_per_strip_ < 1)
     throw badParam("strands_per_strip", std::to_string(strands_per_strip_), "must be >= 1");
@@ -114,22 +119,22 @@ void HairSimNode::rebuild(Hairstyle hairstyle) {
   meshes_ = std::make_unique<HairMeshBuilder>(simulator_->hairstyle(), mesh_options_);
 }
 
-bool HairSimNode::lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose) {
+bool HairSimNode::lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose, ros::Time* found) {
   if (frame == config_.world_frame) {
     pose = Iso3::Identity();
+    if (found) *found = stamp;
     return true;
   }
   try {
     const geometry_msgs::TransformStamped t =
         tf_buffer_.lookupTransform(config_.world_frame, frame, stamp, ros::Duration(0.0));
     pose = tf2::transformToEigen(t);
-    const Eigen::Quaterniond q(pose.linear());
+    if (found) *found = t.header.stamp;
     if (!pose.matrix().allFinite()) {
       ROS_WARN_THROTTLE(5.0, "hair_sim: tf %s -> %s has non-finite values; holding the last good pose",
                         config_.world_frame.c_str(), frame.c_str());
       return false;
     }
-    (void)q;
     return true;
   } catch (const tf2::TransformException& e) {
     ROS_WARN_THROTTLE(5.0, "hair_sim: no tf %s -> %s at %.3f: %s", config_.world_frame.c_str(), frame.c_str(),
@@ -219,15 +224,8 @@ bool HairSimNode::onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs:
 void HairSimNode::onTimer(const ros::TimerEvent&) {
   const double dt = config_.physics.substep;
   Iso3 latest_pose;
-  geometry_msgs::TransformStamped latest;
-  try {
-    latest = tf_buffer_.lookupTransform(config_.world_frame, config_.head_frame, ros::Time(0));
-  } catch (const tf2::TransformException& e) {
-    ROS_WARN_THROTTLE(5.0, "hair_sim: waiting for tf %s -> %s: %s", config_.world_frame.c_str(),
-                      config_.head_frame.c_str(), e.what());
-    return;
-  }
-  const ros::Time target = latest.header.stamp;
+  ros::Time target;
+  if (!lookupPose(config_.head_frame, ros::Time(0), latest_pose, &target)) return;
   if (!started_ || target + ros::Duration(1e-9) < sim_time_) {
     if (started_)
       ROS_WARN("hair_sim: time went backwards (%.3f -> %.3f): starting again from the rest shape",

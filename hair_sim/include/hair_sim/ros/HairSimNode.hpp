@@ -32,8 +32,9 @@ class HairSimNode {
   void onWind(const hair_sim_msgs::Wind::ConstPtr& msg);
   bool onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response);
   /// The one place that asks tf: pose of `frame` in world_frame at `stamp`; on failure warns at most
-  /// every few seconds (naming both frames and tf's reason) and returns false.
-  bool lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose);
+  /// every few seconds (naming both frames and tf's reason) and returns false. stamp 0 = the newest;
+  /// `found` receives the stamp of the transform used.
+  bool lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose, ros::Time* found = nullptr);
   Vec3 windAt(double t) const;
   void publishOutputs(const ros::Time& stamp);
   void publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames);

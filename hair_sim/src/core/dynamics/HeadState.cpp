@@ -10,13 +10,17 @@ void HeadMotionEstimator::reset(const Iso3& pose) {
 HeadState HeadMotionEstimator::update(const Iso3& pose, double dt) {
   HeadState next;
   next.pose = pose;
-  next.linear_velocity = (pose.translation() - state_.pose.translation()) / dt;
-  next.linear_acceleration = (next.linear_velocity - state_.linear_velocity) / dt;
+  const double k = tau_ > 0.0 ? dt / (tau_ + dt) : 1.0;  // first-order low-pass gain
+  const Vec3 v = (pose.translation() - state_.pose.translation()) / dt;
+  next.linear_velocity = state_.linear_velocity + k * (v - state_.linear_velocity);
+  const Vec3 a = (next.linear_velocity - state_.linear_velocity) / dt;
+  next.linear_acceleration = state_.linear_acceleration + k * (a - state_.linear_acceleration);
   const Mat3 relative = state_.pose.linear().transpose() * pose.linear();  // in the previous head frame
   const Eigen::AngleAxisd aa(relative);
-  const Vec3 body_rate = aa.axis() * aa.angle() / dt;
-  next.angular_velocity = state_.pose.linear() * body_rate;
-  next.angular_acceleration = (next.angular_velocity - state_.angular_velocity) / dt;
+  const Vec3 w = state_.pose.linear() * (aa.axis() * aa.angle() / dt);
+  next.angular_velocity = state_.angular_velocity + k * (w - state_.angular_velocity);
+  const Vec3 alpha = (next.angular_velocity - state_.angular_velocity) / dt;
+  next.angular_acceleration = state_.angular_acceleration + k * (alpha - state_.angular_acceleration);
   state_ = next;
   return next;
 }
