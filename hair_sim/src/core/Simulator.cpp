@@ -175,44 +175,65 @@ void Simulator::buildSprings() {
   }
   const double radius = params_.spring_radius;
   if (params_.springs_between_strips && radius > 0.0 && params_.spring_max_pairs > 0) {
-    // Uniform grid of cell size = radius: each point looks at the 27 cells around it, so set-up is
-    // linear in the number of control points for a bounded density.
-    std::unordered_map<std::int64_t, std::vector<int>> grid;
-    auto cellOf = [radius](const Vec3& p) {
-      return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / radius)),
-                             static_cast<int>(std::floor(p.y() / radius)),
-                             static_cast<int>(std::floor(p.z() / radius)));
-    };
+    // k nearest partners through a uniform grid. The cell is radius / m, with m chosen from the mean
+    // occupancy of radius-sized cells so that a cell holds a few points whatever the density; each
+    // point scans shells of cells outward and stops once the k-th nearest is closer than the shell.
+    // Set-up cost per point is then bounded: linear in the number of strips.
+    std::vector<char> is_root(styled.size(), 0);
+    for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si)
+      for (int c = 0; c < hairstyle_.strips[si].columns; ++c)
+        is_root[static_cast<std::size_t>(strip_offset_[si] + c)] = 1;
     auto key = [](const Eigen::Vector3i& c) {
       return (static_cast<std::int64_t>(c.x() & 0x1FFFFF) << 42) |
              (static_cast<std::int64_t>(c.y() & 0x1FFFFF) << 21) |
              static_cast<std::int64_t>(c.z() & 0x1FFFFF);
     };
-    std::vector<char> is_root(styled.size(), 0);
-    for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si)
-      for (int c = 0; c < hairstyle_.strips[si].columns; ++c)
-        is_root[static_cast<std::size_t>(strip_offset_[si] + c)] = 1;
+    auto cellOf = [](const Vec3& p, double size) {
+      return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / size)),
+                             static_cast<int>(std::floor(p.y() / size)),
+                             static_cast<int>(std::floor(p.z() / size)));
+    };
+    std::unordered_map<std::int64_t, std::vector<int>> grid;
     for (std::size_t i = 0; i < styled.size(); ++i)
-      if (!is_root[i]) grid[key(cellOf(styled[i]))].push_back(static_cast<int>(i));
+      if (!is_root[i]) grid[key(cellOf(styled[i], radius))].push_back(static_cast<int>(i));
+    const double occupancy =
+        grid.empty() ? 0.0 : static_cast<double>(styled.size()) / static_cast<double>(grid.size());
+    const int m = std::max(1, std::min(16, static_cast<int>(std::ceil(std::sqrt(occupancy / 4.0)))));
+    const double cell = radius / m;
+    if (m > 1) {
+      grid.clear();
+      for (std::size_t i = 0; i < styled.size(); ++i)
+        if (!is_root[i]) grid[key(cellOf(styled[i], cell))].push_back(static_cast<int>(i));
+    }
+    const std::size_t k = static_cast<std::size_t>(params_.spring_max_pairs);
     std::vector<std::pair<double, int>> near;
     std::unordered_set<std::int64_t> paired;
     for (std::size_t i = 0; i < styled.size(); ++i) {
       if (is_root[i]) continue;
       near.clear();
-      const Eigen::Vector3i c = cellOf(styled[i]);
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            const auto it = grid.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-            if (it == grid.end()) continue;
-            for (int j : it->second) {
-              if (strip_of_point_[static_cast<std::size_t>(j)] == strip_of_point_[i]) continue;
-              const double dist = (styled[static_cast<std::size_t>(j)] - styled[i]).norm();
-              if (dist < radius && dist > 1e-6) near.push_back({dist, j});
+      const Eigen::Vector3i c = cellOf(styled[i], cell);
+      for (int ring = 0; ring <= m; ++ring) {
+        for (int dx = -ring; dx <= ring; ++dx)
+          for (int dy = -ring; dy <= ring; ++dy)
+            for (int dz = -ring; dz <= ring; ++dz) {
+              if (std::max(std::abs(dx), std::max(std::abs(dy), std::abs(dz))) != ring)
+                continue;  // the shell only
+              const auto it = grid.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+              if (it == grid.end()) continue;
+              for (int j : it->second) {
+                if (strip_of_point_[static_cast<std::size_t>(j)] == strip_of_point_[i]) continue;
+                const double dist = (styled[static_cast<std::size_t>(j)] - styled[i]).norm();
+                if (dist < radius && dist > 1e-6) near.push_back({dist, j});
+              }
             }
-          }
+        // Every point closer than ring * cell has been seen: stop when the k nearest are all that close.
+        if (near.size() >= k) {
+          std::nth_element(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(k - 1), near.end());
+          if (near[k - 1].first <= ring * cell) break;
+        }
+      }
       std::sort(near.begin(), near.end());
-      const std::size_t keep = std::min(near.size(), static_cast<std::size_t>(params_.spring_max_pairs));
+      const std::size_t keep = std::min(near.size(), k);
       for (std::size_t n = 0; n < keep; ++n) {
         const int j = near[n].second;
         const int a = std::min(j, static_cast<int>(i)), b = std::max(j, static_cast<int>(i));
