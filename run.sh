@@ -29,6 +29,9 @@ install_deps() {
 
 build() {
   local type=${1:-RelWithDebInfo}
+  # catkin's cached environment (used by CTest for rostests) lists only Python folders that exist at
+  # configure time: create the devel space's one first so that the generated message modules are found.
+  mkdir -p build/devel/lib/python3/dist-packages
   cmake -S . -B build -DCMAKE_BUILD_TYPE="$type" -DCATKIN_DEVEL_PREFIX="$ROOT/build/devel" >build/cmake.log 2>&1 ||
     { mkdir -p build; cmake -S . -B build -DCMAKE_BUILD_TYPE="$type" -DCATKIN_DEVEL_PREFIX="$ROOT/build/devel"; }
   cmake --build build -j"$(nproc)"
