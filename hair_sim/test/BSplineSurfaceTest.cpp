@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "TestUtil.hpp"
+
 #include <cmath>
 #include <limits>
 #include <random>
@@ -30,16 +32,7 @@ const Vec3& at(const std::vector<Vec3>& grid, int columns, int column, int row) 
   return grid[static_cast<std::size_t>(row * columns + column)];
 }
 
-/// Expects `statement` to throw std::invalid_argument whose message contains `text`.
-template <typename F>
-void expectInvalid(F statement, const std::string& text) {
-  try {
-    statement();
-    ADD_FAILURE() << "no exception, expected one mentioning '" << text << "'";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
-  }
-}
+using test::expectInvalid;
 
 TEST(BSplineSurfaceTest, DegreeAcrossFollowsColumnCount) {
   EXPECT_EQ(BSplineSurface::degreeAcross(2), 1);

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "TestUtil.hpp"
+
 #include <cmath>
 #include <limits>
 #include <random>
@@ -28,15 +30,7 @@ StripMesh hangingStrip(const LevelOfDetail& level, double hair_length = 0.4) {
   return mesh;
 }
 
-template <typename F>
-void expectInvalid(F statement, const std::string& text) {
-  try {
-    statement();
-    ADD_FAILURE() << "no exception, expected one mentioning '" << text << "'";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
-  }
-}
+using test::expectInvalid;
 
 TEST(HairLookTest, KajiyaKayDiffuseIsAnisotropic) {
   const Vec3 light = Vec3(0.0, 0.0, 1.0);

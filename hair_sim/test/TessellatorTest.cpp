@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "TestUtil.hpp"
+
 #include <cmath>
 #include <limits>
 #include <random>
@@ -70,15 +72,7 @@ double maxPositionDifference(const StripMesh& a, const StripMesh& b) {
   return worst;
 }
 
-template <typename F>
-void expectInvalid(F statement, const std::string& text) {
-  try {
-    statement();
-    ADD_FAILURE() << "no exception, expected one mentioning '" << text << "'";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
-  }
-}
+using test::expectInvalid;
 
 TEST(TessellatorTest, DefaultsAndNames) {
   const Tessellator tessellator;

@@ -60,5 +60,16 @@ std::string errorOf(F f) {
   return "";
 }
 
+/// Expects `statement` to throw std::invalid_argument whose message contains `text`.
+template <typename F>
+void expectInvalid(F statement, const std::string& text) {
+  try {
+    statement();
+    ADD_FAILURE() << "no exception, expected one mentioning '" << text << "'";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace test
 }  // namespace hair_sim
