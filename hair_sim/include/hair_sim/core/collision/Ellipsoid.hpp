@@ -48,7 +48,8 @@ class Ellipsoid {
   /// The surface point on the ray from the centre through p (radial projection in sphere space).
   Vec3 radialProjection(const Vec3& p) const;
   /// True Euclidean closest surface point, from inside or outside, robust up to large axis ratios
-  /// (Eberly's set-up, Newton on the Lagrange multiplier with a bisection fallback), accurate to ~1e-12 relative.
+  /// (Eberly's set-up, Newton on the Lagrange multiplier with a bisection fallback), accurate to ~1e-12
+  /// relative.
   ClosestPoint closestPoint(const Vec3& p) const;
   /// Path test (the paper's ray test in sphere space): if the straight path a -> b enters the
   /// ellipsoid, returns true with *t_enter in [0, 1] the first parameter on the surface
