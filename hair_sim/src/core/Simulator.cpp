@@ -175,70 +175,109 @@ void Simulator::buildSprings() {
   }
   const double radius = params_.spring_radius;
   if (params_.springs_between_strips && radius > 0.0 && params_.spring_max_pairs > 0) {
-    // k nearest partners through a uniform grid. The cell is radius / m, with m chosen from the mean
-    // occupancy of radius-sized cells so that a cell holds a few points whatever the density; each
-    // point scans shells of cells outward and stops once the k-th nearest is closer than the shell.
-    // Set-up cost per point is then bounded: linear in the number of strips.
+    // k nearest partners through a uniform grid stored densely (counting sort into cells, CSR). The
+    // cell is radius / m, with m chosen from the mean occupancy of radius-sized cells so that a cell
+    // holds a few points whatever the density; each point scans shells of cells outward and stops
+    // once the k-th nearest is closer than the shell. Set-up is linear in the number of strips.
+    std::vector<int> movable;
+    movable.reserve(styled.size());
     std::vector<char> is_root(styled.size(), 0);
     for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si)
       for (int c = 0; c < hairstyle_.strips[si].columns; ++c)
         is_root[static_cast<std::size_t>(strip_offset_[si] + c)] = 1;
-    auto key = [](const Eigen::Vector3i& c) {
-      return (static_cast<std::int64_t>(c.x() & 0x1FFFFF) << 42) |
-             (static_cast<std::int64_t>(c.y() & 0x1FFFFF) << 21) |
-             static_cast<std::int64_t>(c.z() & 0x1FFFFF);
-    };
-    auto cellOf = [](const Vec3& p, double size) {
-      return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / size)),
-                             static_cast<int>(std::floor(p.y() / size)),
-                             static_cast<int>(std::floor(p.z() / size)));
-    };
-    std::unordered_map<std::int64_t, std::vector<int>> grid;
+    Eigen::AlignedBox3d box;
     for (std::size_t i = 0; i < styled.size(); ++i)
-      if (!is_root[i]) grid[key(cellOf(styled[i], radius))].push_back(static_cast<int>(i));
-    const double occupancy =
-        grid.empty() ? 0.0 : static_cast<double>(styled.size()) / static_cast<double>(grid.size());
-    const int m = std::max(1, std::min(16, static_cast<int>(std::ceil(std::sqrt(occupancy / 4.0)))));
-    const double cell = radius / m;
-    if (m > 1) {
-      grid.clear();
-      for (std::size_t i = 0; i < styled.size(); ++i)
-        if (!is_root[i]) grid[key(cellOf(styled[i], cell))].push_back(static_cast<int>(i));
-    }
-    const std::size_t k = static_cast<std::size_t>(params_.spring_max_pairs);
-    std::vector<std::pair<double, int>> near;
-    std::unordered_set<std::int64_t> paired;
-    for (std::size_t i = 0; i < styled.size(); ++i) {
-      if (is_root[i]) continue;
-      near.clear();
-      const Eigen::Vector3i c = cellOf(styled[i], cell);
-      for (int ring = 0; ring <= m; ++ring) {
-        for (int dx = -ring; dx <= ring; ++dx)
-          for (int dy = -ring; dy <= ring; ++dy)
-            for (int dz = -ring; dz <= ring; ++dz) {
-              if (std::max(std::abs(dx), std::max(std::abs(dy), std::abs(dz))) != ring)
-                continue;  // the shell only
-              const auto it = grid.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-              if (it == grid.end()) continue;
-              for (int j : it->second) {
-                if (strip_of_point_[static_cast<std::size_t>(j)] == strip_of_point_[i]) continue;
-                const double dist = (styled[static_cast<std::size_t>(j)] - styled[i]).norm();
-                if (dist < radius && dist > 1e-6) near.push_back({dist, j});
+      if (!is_root[i]) {
+        movable.push_back(static_cast<int>(i));
+        box.extend(styled[i]);
+      }
+    if (!movable.empty()) {
+      // Occupancy of radius-sized cells that hold points: a surface-like layer of hair, so the
+      // subdivision m grows with the square root of the occupancy.
+      std::unordered_set<std::int64_t> used;
+      for (int i : movable) {
+        const Vec3 q = (styled[static_cast<std::size_t>(i)] - box.min()) / radius;
+        used.insert((static_cast<std::int64_t>(q.x()) << 42) | (static_cast<std::int64_t>(q.y()) << 21) |
+                    static_cast<std::int64_t>(q.z()));
+      }
+      const double occupancy = static_cast<double>(movable.size()) / static_cast<double>(used.size());
+      int m = std::max(1, std::min(16, static_cast<int>(std::ceil(std::sqrt(occupancy / 4.0)))));
+      const Vec3 extent = box.max() - box.min();
+      Eigen::Vector3i dims;
+      double cell = radius / m;
+      for (;;) {
+        for (int a = 0; a < 3; ++a) dims[a] = static_cast<int>(std::floor(extent[a] / cell)) + 1;
+        if (static_cast<double>(dims.x()) * dims.y() * dims.z() <= 8e6 || m == 1) break;
+        --m;  // keep the dense grid within a few tens of MB
+        cell = radius / m;
+      }
+      auto cellOf = [&](const Vec3& p) {
+        Eigen::Vector3i c;
+        for (int a = 0; a < 3; ++a)
+          c[a] =
+              std::min(dims[a] - 1, std::max(0, static_cast<int>(std::floor((p[a] - box.min()[a]) / cell))));
+        return c;
+      };
+      auto flat = [&](const Eigen::Vector3i& c) {
+        return (static_cast<std::size_t>(c.z()) * static_cast<std::size_t>(dims.y()) +
+                static_cast<std::size_t>(c.y())) *
+                   static_cast<std::size_t>(dims.x()) +
+               static_cast<std::size_t>(c.x());
+      };
+      const std::size_t cells = static_cast<std::size_t>(dims.x()) * static_cast<std::size_t>(dims.y()) *
+                                static_cast<std::size_t>(dims.z());
+      std::vector<int> cell_start(cells + 1, 0);
+      for (int i : movable) ++cell_start[flat(cellOf(styled[static_cast<std::size_t>(i)])) + 1];
+      for (std::size_t c = 0; c < cells; ++c) cell_start[c + 1] += cell_start[c];
+      std::vector<int> cell_points(movable.size());
+      {
+        std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+        for (int i : movable)
+          cell_points[static_cast<std::size_t>(fill[flat(cellOf(styled[static_cast<std::size_t>(i)]))]++)] =
+              i;
+      }
+      const std::size_t k = static_cast<std::size_t>(params_.spring_max_pairs);
+      std::vector<std::pair<double, int>> near;
+      std::unordered_set<std::int64_t> paired;
+      for (int ii : movable) {
+        const std::size_t i = static_cast<std::size_t>(ii);
+        near.clear();
+        const Eigen::Vector3i c = cellOf(styled[i]);
+        for (int ring = 0; ring <= m; ++ring) {
+          for (int dz = -ring; dz <= ring; ++dz) {
+            const int z = c.z() + dz;
+            if (z < 0 || z >= dims.z()) continue;
+            for (int dy = -ring; dy <= ring; ++dy) {
+              const int y = c.y() + dy;
+              if (y < 0 || y >= dims.y()) continue;
+              const bool face = std::abs(dz) == ring || std::abs(dy) == ring;
+              for (int dx = -ring; dx <= ring; dx += (face || ring == 0) ? 1 : 2 * ring) {  // the shell only
+                const int x = c.x() + dx;
+                if (x < 0 || x >= dims.x()) continue;
+                const std::size_t f = flat(Eigen::Vector3i(x, y, z));
+                for (int q = cell_start[f]; q < cell_start[f + 1]; ++q) {
+                  const int j = cell_points[static_cast<std::size_t>(q)];
+                  if (strip_of_point_[static_cast<std::size_t>(j)] == strip_of_point_[i]) continue;
+                  const double dist = (styled[static_cast<std::size_t>(j)] - styled[i]).norm();
+                  if (dist < radius && dist > 1e-6) near.push_back({dist, j});
+                }
               }
             }
-        // Every point closer than ring * cell has been seen: stop when the k nearest are all that close.
-        if (near.size() >= k) {
-          std::nth_element(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(k - 1), near.end());
-          if (near[k - 1].first <= ring * cell) break;
+          }
+          // Every point closer than ring * cell has been seen: stop when the k nearest are all that close.
+          if (near.size() >= k) {
+            std::nth_element(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(k - 1), near.end());
+            if (near[k - 1].first <= ring * cell) break;
+          }
         }
-      }
-      std::sort(near.begin(), near.end());
-      const std::size_t keep = std::min(near.size(), k);
-      for (std::size_t n = 0; n < keep; ++n) {
-        const int j = near[n].second;
-        const int a = std::min(j, static_cast<int>(i)), b = std::max(j, static_cast<int>(i));
-        if (!paired.insert((static_cast<std::int64_t>(a) << 32) | b).second) continue;  // each pair once
-        springs_.push_back(SpringPair{static_cast<int>(i), j, near[n].first, false});
+        const std::size_t keep = std::min(near.size(), k);
+        std::partial_sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(keep), near.end());
+        for (std::size_t n = 0; n < keep; ++n) {
+          const int j = near[n].second;
+          const int a = std::min(j, ii), b = std::max(j, ii);
+          if (!paired.insert((static_cast<std::int64_t>(a) << 32) | b).second) continue;  // each pair once
+          springs_.push_back(SpringPair{ii, j, near[n].first, false});
+        }
       }
     }
   }
