@@ -56,78 +56,9 @@ ROOT_TOLERANCE = 1e-4
 
 
 # ---------------------------------------------------------------------------------------------- geometry
-def quat_to_matrix(x, y, z, w):
-    n = math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x / n, y / n, z / n, w / n
-    return ((1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)),
-            (2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)),
-            (2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)))
-
-
-def rpy_to_matrix(roll, pitch, yaw):
-    """R = Rz(yaw) Ry(pitch) Rx(roll), as tf2's setRPY and the config's bodies."""
-    cr, sr = math.cos(roll), math.sin(roll)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    return ((cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
-            (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
-            (-sp, cp * sr, cp * cr))
-
-
-def mat_vec(m, v):
-    return tuple(m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2] for i in range(3))
-
-
-def mat_t_vec(m, v):
-    return tuple(m[0][i] * v[0] + m[1][i] * v[1] + m[2][i] * v[2] for i in range(3))
-
-
-def mat_mul(a, b):
-    return tuple(tuple(sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)) for i in range(3))
-
-
-def transpose(m):
-    return tuple(tuple(m[j][i] for j in range(3)) for i in range(3))
-
-
-class Pose(object):
-    """A rigid transform p_world = R p + t."""
-
-    def __init__(self, rotation, translation):
-        self.r = rotation
-        self.t = translation
-
-    @staticmethod
-    def identity():
-        return Pose(((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)), (0.0, 0.0, 0.0))
-
-    @staticmethod
-    def from_msg(transform_stamped):
-        tr = transform_stamped.transform
-        q = tr.rotation
-        return Pose(quat_to_matrix(q.x, q.y, q.z, q.w), (tr.translation.x, tr.translation.y, tr.translation.z))
-
-    def to_local(self, p):
-        return mat_t_vec(self.r, (p[0] - self.t[0], p[1] - self.t[1], p[2] - self.t[2]))
-
-
-class Body(object):
-    """An ellipsoid of the config: centre, rpy and radii in a tf frame."""
-
-    def __init__(self, entry):
-        self.name = entry['name']
-        self.frame = entry['frame']
-        self.center = tuple(float(v) for v in entry['center'])
-        self.rotation = rpy_to_matrix(*[float(v) for v in entry.get('rpy', [0.0, 0.0, 0.0])])
-        self.radii = tuple(float(v) for v in entry['radii'])
-
-    def sphere_map(self, frame_pose):
-        """(M, o) with S^-1 (p - c) = M p - o for world points p, the body's frame at frame_pose."""
-        scale = ((1.0 / self.radii[0], 0.0, 0.0), (0.0, 1.0 / self.radii[1], 0.0), (0.0, 0.0, 1.0 / self.radii[2]))
-        m = mat_mul(scale, mat_mul(transpose(self.rotation), transpose(frame_pose.r)))
-        center_world = tuple(a + b for a, b in zip(mat_vec(frame_pose.r, self.center), frame_pose.t))
-        return m, mat_vec(m, center_world)
-
+# Shared geometry (this folder is not on sys.path when catkin's relay runs the script).
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+from hair_test_geometry import Body, Pose  # noqa: E402
 
 def mean(values):
     values = list(values)
