@@ -7,8 +7,11 @@
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "hair_sim");
+  // The handles outlive a failing constructor, so that roscpp is still up to print ROS_FATAL.
+  ros::NodeHandle nh;
+  ros::NodeHandle private_nh("~");
   try {
-    hair_sim::HairSimNode node(ros::NodeHandle(), ros::NodeHandle("~"));
+    hair_sim::HairSimNode node(nh, private_nh);
     ros::spin();
   } catch (const std::exception& e) {
     ROS_FATAL("hair_sim: %s", e.what());
