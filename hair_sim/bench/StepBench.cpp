@@ -19,15 +19,7 @@ Hairstyle benchHairstyle(const SimConfig& config, int strips) {
   options.rings = std::max(5, static_cast<int>(std::sqrt(strips / 4.0)));
   Iso3 rest = Iso3::Identity();
   rest.translation() = Vec3(0.0, 0.0, 1.6);
-  Ellipsoid scalp;
-  std::vector<Ellipsoid> obstacles;
-  for (const Body& b : config.bodies) {
-    if (b.name == "head")
-      scalp = b.shape;
-    else
-      obstacles.push_back(b.frame == config.head_frame ? b.shape : b.shape.transformed(rest.inverse()));
-  }
-  return generateHairstyle(scalp, options, obstacles);
+  return generateHairstyle(config, rest, options);
 }
 
 /// Simulator set-up (chains, rest compensation, spring pairs through the grid); items = strips.

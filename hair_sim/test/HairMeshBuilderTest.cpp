@@ -35,6 +35,27 @@ TEST(HairMeshBuilderTest, RootEdgeLiesOnTheScalpAndCountsMatchTheFormula) {
   EXPECT_EQ(builder.triangleCount(), triangles);
 }
 
+TEST(HairMeshBuilderTest, EveryColumnOfTheDefaultHairstyleIsAsLongAsItsHair) {
+  // The shipped hairstyle at rest, default level of detail: each tessellated column's polyline
+  // length equals the strip's hair length within 1 %.
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  const Hairstyle style = loadHairstyle(config.hairstyle_file);
+  Tessellator tessellator;
+  StripMesh m;
+  for (std::size_t s = 0; s < style.strips.size(); ++s) {
+    const Strip& st = style.strips[s];
+    tessellator.tessellate(st.points, st.columns, st.rows, st.hair_length, m);
+    for (int iu = 0; iu < m.n_u; ++iu) {
+      double length = 0.0;
+      for (int iv = 1; iv < m.n_v; ++iv)
+        length += (m.positions[static_cast<std::size_t>(m.index(iu, iv))] -
+                   m.positions[static_cast<std::size_t>(m.index(iu, iv - 1))])
+                      .norm();
+      EXPECT_NEAR(length, st.hair_length, 0.01 * st.hair_length) << "strip " << s << " column " << iu;
+    }
+  }
+}
+
 TEST(HairMeshBuilderTest, TriangleBudgetChoosesTheLevel) {
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
   const Hairstyle style = loadHairstyle(config.hairstyle_file);

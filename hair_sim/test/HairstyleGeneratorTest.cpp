@@ -40,7 +40,9 @@ TEST(HairstyleGeneratorTest, LengthsVaryAndGrowTowardTheBack) {
     lengths.insert(s.hair_length);
     if (s.point(0, 0).x() > 0.03) front_sum += s.hair_length, ++front_n;
     if (s.point(0, 0).x() < -0.03) back_sum += s.hair_length, ++back_n;
-    EXPECT_NEAR(s.columnLength(0), s.hair_length, 1e-9);
+    // The surface (a spline inside the control polygon) ends at the hair length, the polygon after it.
+    EXPECT_LE(s.hair_length, s.columnLength(0));
+    EXPECT_GT(s.hair_length, 0.9 * s.columnLength(0));
   }
   EXPECT_GT(lengths.size(), h.strips.size() / 2);
   ASSERT_GT(front_n, 0);

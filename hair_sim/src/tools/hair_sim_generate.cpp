@@ -64,24 +64,11 @@ int main(int argc, char** argv) {
       std::cerr << "hair_sim_generate: --out is required\n" << kUsage;
       return 2;
     }
-    hair_sim::Ellipsoid scalp(hair_sim::Vec3::Zero(), hair_sim::Mat3::Identity(),
-                              hair_sim::Vec3(0.095, 0.075, 0.115));
-    std::vector<hair_sim::Ellipsoid> obstacles;
-    if (!config_path.empty()) {
-      const hair_sim::SimConfig config = hair_sim::loadSimConfig(config_path);
-      hair_sim::Iso3 head_in_world = hair_sim::Iso3::Identity();
-      head_in_world.translation() = hair_sim::Vec3(0.0, 0.0, head_z);
-      for (const hair_sim::Body& b : config.bodies) {
-        if (b.name == "head") {
-          scalp = b.shape;
-        } else if (b.frame == config.head_frame) {
-          obstacles.push_back(b.shape);
-        } else {
-          obstacles.push_back(b.shape.transformed(head_in_world.inverse()));
-        }
-      }
-    }
-    const hair_sim::Hairstyle style = hair_sim::generateHairstyle(scalp, o, obstacles);
+    hair_sim::SimConfig config;  // no bodies: the default scalp only
+    if (!config_path.empty()) config = hair_sim::loadSimConfig(config_path);
+    hair_sim::Iso3 head_in_world = hair_sim::Iso3::Identity();
+    head_in_world.translation() = hair_sim::Vec3(0.0, 0.0, head_z);
+    const hair_sim::Hairstyle style = hair_sim::generateHairstyle(config, head_in_world, o);
     style.validate(out);
     hair_sim::saveHairstyle(style, out);
     std::cout << "hair_sim_generate: " << style.strips.size() << " strips, " << style.controlPointCount()

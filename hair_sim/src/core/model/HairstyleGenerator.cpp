@@ -5,6 +5,8 @@
 #include <random>
 #include <stdexcept>
 
+#include "hair_sim/core/geometry/Tessellator.hpp"
+
 namespace hair_sim {
 
 namespace {
@@ -40,6 +42,26 @@ Vec3 drape(const Vec3& pivot, Vec3 end, double d, const std::vector<Ellipsoid>& 
     if (!moved) break;
   }
   return end;
+}
+
+/// The hair length of a draped strip: where its surface, not its control polygon, ends. The spline
+/// cuts the corners of a bent chain, so it is shorter than the polygon; the shortest column of a fine
+/// tessellation (a hair's breadth less, so that every column is clipped exactly there) makes each
+/// tessellated column as long as the strip's hair length at rest.
+double splineLength(const Strip& s) {
+  Tessellator fine(LevelOfDetail{4, 16});
+  StripMesh mesh;
+  fine.tessellate(s.points, s.columns, s.rows, 1e3, mesh);
+  double shortest = 1e300;
+  for (int iu = 0; iu < mesh.n_u; ++iu) {
+    double length = 0.0;
+    for (int iv = 1; iv < mesh.n_v; ++iv)
+      length += (mesh.positions[static_cast<std::size_t>(mesh.index(iu, iv))] -
+                 mesh.positions[static_cast<std::size_t>(mesh.index(iu, iv - 1))])
+                    .norm();
+    shortest = std::min(shortest, length);
+  }
+  return shortest * (1.0 - 1e-6);
 }
 
 }  // namespace
@@ -126,10 +148,25 @@ Hairstyle generateHairstyle(const Ellipsoid& scalp, const GeneratorOptions& o,
           pivot = end;
         }
       }
+      s.hair_length = splineLength(s);
       style.strips.push_back(std::move(s));
     }
   }
   return style;
+}
+
+Hairstyle generateHairstyle(const SimConfig& config, const Iso3& head_in_world,
+                            const GeneratorOptions& options) {
+  Ellipsoid scalp(Vec3::Zero(), Mat3::Identity(), Vec3(0.095, 0.075, 0.115));
+  std::vector<Ellipsoid> obstacles;
+  for (const Body& b : config.bodies) {
+    if (b.name == "head")
+      scalp = b.shape;
+    else
+      obstacles.push_back(b.frame == config.head_frame ? b.shape
+                                                       : b.shape.transformed(head_in_world.inverse()));
+  }
+  return generateHairstyle(scalp, options, obstacles);
 }
 
 }  // namespace hair_sim

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "hair_sim/core/model/Hairstyle.hpp"
+#include "hair_sim/core/model/SimConfig.hpp"
 
 namespace hair_sim {
 
@@ -30,5 +31,12 @@ struct GeneratorOptions {
 /// Obstacles are bodies at the rest pose expressed in the head frame (the scalp need not be listed).
 Hairstyle generateHairstyle(const Ellipsoid& scalp, const GeneratorOptions& options,
                             const std::vector<Ellipsoid>& obstacles = {});
+
+/// The same, draped over a config's bodies with the head frame at `head_in_world` (the rest pose):
+/// the body named "head" is the scalp, bodies in head_frame stay as they are, the others (in
+/// world_frame) are brought into the head frame. Without a "head" body the scalp is an adult head
+/// of radii 0.095 x 0.075 x 0.115 m at the head frame's origin.
+Hairstyle generateHairstyle(const SimConfig& config, const Iso3& head_in_world,
+                            const GeneratorOptions& options);
 
 }  // namespace hair_sim
