@@ -64,13 +64,11 @@ void HairSimNode::readParameters() {
   // Individual parameters override the file (launch file arguments).
   std::string frame;
   if (pnh_.getParam("world_frame", frame)) {
-    if (frame.empty() || frame.front() == '/')
-      throw badParam("world_frame", frame, "is not a valid tf frame name");
+    if (!isValidFrameName(frame)) throw badParam("world_frame", frame, "is not a valid tf frame name");
     config_.world_frame = frame;
   }
   if (pnh_.getParam("head_frame", frame)) {
-    if (frame.empty() || frame.front() == '/')
-      throw badParam("head_frame", frame, "is not a valid tf frame name");
+    if (!isValidFrameName(frame)) throw badParam("head_frame", frame, "is not a valid tf frame name");
     config_.head_frame = frame;
   }
   if (config_.world_frame == config_.head_frame)
@@ -366,6 +364,12 @@ void HairSimNode::publishOutputs(const ros::Time& stamp) {
 }
 
 void HairSimNode::publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames) {
+  // Latched, and sent again only when a body moved (1e-6 m or rad): world-fixed bodies go out once.
+  bool changed = published_body_frames_.size() != frames.size();
+  for (std::size_t b = 0; !changed && b < frames.size(); ++b)
+    changed = (frames[b].matrix() - published_body_frames_[b].matrix()).cwiseAbs().maxCoeff() > 1e-6;
+  if (!changed) return;
+  published_body_frames_ = frames;
   visualization_msgs::MarkerArray array;
   for (std::size_t b = 0; b < config_.bodies.size() && b < frames.size(); ++b) {
     const Body& body = config_.bodies[b];

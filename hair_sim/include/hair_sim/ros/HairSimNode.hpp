@@ -60,6 +60,7 @@ class HairSimNode {
   bool started_ = false;
   ros::Time sim_time_;
   std::vector<Iso3> last_body_frames_;
+  std::vector<Iso3> published_body_frames_;
   std::vector<Vec3> world_points_;
 
   // Wind: blends from wind_from_ to wind_to_ over [wind_start_, wind_start_ + wind_ramp_] (sim seconds).

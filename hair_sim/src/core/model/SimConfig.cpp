@@ -12,10 +12,14 @@ std::string resolveRelativeTo(const std::string& file, const std::string& relati
   return slash == std::string::npos ? relative : file.substr(0, slash + 1) + relative;
 }
 
+bool isValidFrameName(const std::string& frame) {
+  return !frame.empty() && frame.find_first_of(" \t") == std::string::npos && frame.front() != '/';
+}
+
 namespace {
 
 void checkFrame(const YamlReader& y, const std::string& key, const std::string& frame) {
-  if (frame.empty() || frame.find_first_of(" \t") != std::string::npos || frame.front() == '/')
+  if (!isValidFrameName(frame))
     throw y.error(key, "'" + frame + "' is not a valid tf frame name (non-empty, no spaces, no leading '/')");
 }
 

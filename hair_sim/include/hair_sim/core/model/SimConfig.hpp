@@ -21,6 +21,9 @@ struct SimConfig {
 /// Loads and validates; throws std::invalid_argument naming the file, key, line and value.
 SimConfig loadSimConfig(const std::string& path);
 
+/// A tf2 frame name: non-empty, no spaces, no leading '/'.
+bool isValidFrameName(const std::string& frame);
+
 /// `relative` resolved against the folder of `file` (unchanged when already absolute).
 std::string resolveRelativeTo(const std::string& file, const std::string& relative);
 
