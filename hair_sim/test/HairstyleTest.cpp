@@ -41,15 +41,8 @@ TEST(HairstyleTest, LoadsAndRoundTripsBitIdentically) {
   EXPECT_FLOAT_EQ(b.strips[0].color.r, 0.3f);
 }
 
-struct BadCase {
-  const char* from;
-  const char* to;
-  const char* expect_key;
-  const char* expect_value;
-};
-
 TEST(HairstyleTest, EveryMalformedKeyIsNamedWithItsValue) {
-  const BadCase cases[] = {
+  const std::vector<test::FileEdit> cases = {
       {"rows: 4", "rows: 3", "strips[0].rows", "3"},
       {"columns: 2", "columns: 1", "strips[0].columns", "1"},
       {"columns: 2", "columns: two", "strips[0].columns", "two"},
@@ -67,17 +60,7 @@ TEST(HairstyleTest, EveryMalformedKeyIsNamedWithItsValue) {
       {"    width: 0.02\n", "    width: 0.02\n    lenght: 3\n", "strips[0].lenght", "unknown key"},
       {"format_version: 1", "format_version: 2", "format_version", "2"},
   };
-  for (const BadCase& c : cases) {
-    std::string text = kGood;
-    const std::size_t at = text.find(c.from);
-    ASSERT_NE(at, std::string::npos) << c.from;
-    text.replace(at, std::strlen(c.from), c.to);
-    const std::string path = test::writeTemp("bad.yaml", text);
-    const std::string m = test::errorOf([&] { loadHairstyle(path); });
-    EXPECT_NE(m.find(path), std::string::npos) << m;
-    EXPECT_NE(m.find(c.expect_key), std::string::npos) << "case " << c.to << ": " << m;
-    EXPECT_NE(m.find(c.expect_value), std::string::npos) << "case " << c.to << ": " << m;
-  }
+  test::expectEditsNamed(kGood, cases, [](const std::string& path) { loadHairstyle(path); });
 }
 
 TEST(HairstyleTest, EmptyStripListIsRejected) {
@@ -101,7 +84,7 @@ TEST(HairstyleTest, ConfigErrorsNameKeyAndValue) {
   const std::string base = test::repoPath("config/hair_sim.yaml");
   std::ifstream in(base);
   const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const BadCase cases[] = {
+  const std::vector<test::FileEdit> cases = {
       {"hinge_stiffness: 4.0e-4", "hinge_stiffness: -1", "physics.hinge_stiffness", "-1"},
       {"substep: 0.004166666666666667", "substep: 0", "physics.substep", "0"},
       {"publish_rate: 30.0", "publish_rate: fast", "publish_rate", "fast"},
@@ -109,16 +92,7 @@ TEST(HairstyleTest, ConfigErrorsNameKeyAndValue) {
       {"air_drag: 0.02", "air_drag: 0.02\n  air_dragg: 1", "physics.air_dragg", "unknown key"},
       {"gravity: [0.0, 0.0, -9.81]", "gravity: [0.0, -9.81]", "physics.gravity", "[0.0, -9.81]"},
   };
-  for (const BadCase& c : cases) {
-    std::string text = good;
-    const std::size_t at = text.find(c.from);
-    ASSERT_NE(at, std::string::npos) << c.from;
-    text.replace(at, std::strlen(c.from), c.to);
-    const std::string path = test::writeTemp("config.yaml", text);
-    const std::string m = test::errorOf([&] { loadSimConfig(path); });
-    EXPECT_NE(m.find(c.expect_key), std::string::npos) << m;
-    EXPECT_NE(m.find(c.expect_value), std::string::npos) << m;
-  }
+  test::expectEditsNamed(good, cases, [](const std::string& path) { loadSimConfig(path); });
 }
 
 }  // namespace

@@ -48,12 +48,7 @@ TEST(ScenarioTest, MalformedKeysAreNamed) {
   const std::string good =
       "duration: 2.0\noutput_rate: 30\nhead:\n  - {t: 0.0, position: [0, 0, 1.6], rpy: [0, 0, 0]}\n"
       "  - {t: 1.0, position: [0, 0, 1.6], rpy: [0, 0, 0.5]}\nwind:\n  - {t: 0.0, velocity: [1, 0, 0]}\n";
-  struct Case {
-    const char* from;
-    const char* to;
-    const char* key;
-    const char* value;
-  } cases[] = {
+  const std::vector<test::FileEdit> cases = {
       {"duration: 2.0", "duration: -2", "duration", "-2"},
       {"output_rate: 30", "output_rate: x", "output_rate", "'x'"},
       {"t: 1.0", "t: 0.0", "head[1].t", "0"},
@@ -64,17 +59,7 @@ TEST(ScenarioTest, MalformedKeysAreNamed) {
       {"velocity: [1, 0, 0]}", "velocity: [1, 0, 0], gust: 1}", "wind[0].gust", "unknown key"},
       {"head:\n", "heads: 1\nhead:\n", "heads", "unknown key"},
   };
-  for (const Case& c : cases) {
-    std::string text = good;
-    const std::size_t at = text.find(c.from);
-    ASSERT_NE(at, std::string::npos) << c.from;
-    text.replace(at, std::strlen(c.from), c.to);
-    const std::string path = test::writeTemp("scenario.yaml", text);
-    const std::string m = test::errorOf([&] { Scenario::load(path); });
-    EXPECT_NE(m.find(path), std::string::npos) << m;
-    EXPECT_NE(m.find(c.key), std::string::npos) << m;
-    EXPECT_NE(m.find(c.value), std::string::npos) << m;
-  }
+  test::expectEditsNamed(good, cases, [](const std::string& path) { Scenario::load(path); });
 }
 
 }  // namespace

@@ -185,12 +185,7 @@ TEST(SimulatorCollisionTest, BodyFramesMustMatchTheBodies) {
 TEST(SimulatorCollisionTest, BadBodiesInTheConfigAreNamed) {
   std::ifstream in(test::repoPath("config/hair_sim.yaml"));
   const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  struct Case {
-    const char* from;
-    const char* to;
-    const char* key;
-    const char* value;
-  } cases[] = {
+  const std::vector<test::FileEdit> cases = {
       {"radii: [0.05, 0.05, 0.09]", "radii: [0.05, 0.0, 0.09]", "bodies[1].radii", "radius 0"},
       {"name: neck", "name: head", "bodies[1].name", "'head' is used by two bodies"},
       {"frame: world, center: [-0.01", "frame: '', center: [-0.01", "bodies[1].frame", "valid tf frame"},
@@ -198,16 +193,7 @@ TEST(SimulatorCollisionTest, BadBodiesInTheConfigAreNamed) {
       {"stiffness: 5.0", "stiffness: -5.0", "collision.stiffness", "-5"},
       {"proximity_factor: 0.6", "proximity_factor: 1.6", "springs.proximity_factor", "1.6"},
   };
-  for (const Case& c : cases) {
-    std::string text = good;
-    const std::size_t at = text.find(c.from);
-    ASSERT_NE(at, std::string::npos) << c.from;
-    text.replace(at, std::strlen(c.from), c.to);
-    const std::string path = test::writeTemp("bodies.yaml", text);
-    const std::string m = test::errorOf([&] { loadSimConfig(path); });
-    EXPECT_NE(m.find(c.key), std::string::npos) << m;
-    EXPECT_NE(m.find(c.value), std::string::npos) << m;
-  }
+  test::expectEditsNamed(good, cases, [](const std::string& path) { loadSimConfig(path); });
 }
 
 }  // namespace

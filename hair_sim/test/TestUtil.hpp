@@ -6,6 +6,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "hair_sim/core/model/Hairstyle.hpp"
 
@@ -58,6 +59,31 @@ std::string errorOf(F f) {
   }
   ADD_FAILURE() << "expected std::invalid_argument";
   return "";
+}
+
+/// One malformed edit of a good file: `from` replaced by `to`; the error must name `key` and `value`.
+struct FileEdit {
+  const char* from;
+  const char* to;
+  const char* key;
+  const char* value;
+};
+
+/// For every edit: writes the edited text to a fresh file, calls load(path) and expects a
+/// std::invalid_argument whose message names the file, the key and the value.
+template <typename Load>
+void expectEditsNamed(const std::string& good, const std::vector<FileEdit>& edits, Load load) {
+  for (const FileEdit& e : edits) {
+    std::string text = good;
+    const std::size_t at = text.find(e.from);
+    ASSERT_NE(at, std::string::npos) << e.from;
+    text.replace(at, std::string(e.from).size(), e.to);
+    const std::string path = writeTemp("edited.yaml", text);
+    const std::string m = errorOf([&] { load(path); });
+    EXPECT_NE(m.find(path), std::string::npos) << "edit '" << e.to << "': " << m;
+    EXPECT_NE(m.find(e.key), std::string::npos) << "edit '" << e.to << "': " << m;
+    EXPECT_NE(m.find(e.value), std::string::npos) << "edit '" << e.to << "': " << m;
+  }
 }
 
 /// Expects `statement` to throw std::invalid_argument whose message contains `text`.
