@@ -13,6 +13,8 @@ namespace hair_sim {
 
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+
 Vec3 anyPerpendicular(const Vec3& a) {
   const Vec3 helper = std::abs(a.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
   return a.cross(helper).normalized();
@@ -435,17 +437,24 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
         if (L < 1e-12) continue;
         const Vec3 axis = po / L;
         const double h = (d * d - r * r + L * L) / (2.0 * L);
-        if (std::abs(h) >= d) continue;  // no such circle: the band cannot be met from this pivot
+        if (std::abs(h) >= d) {
+          // No such circle: the band cannot be met from this pivot. Come as close to it as the
+          // segment allows (straight toward the partner, or straight away from it), if that is clear.
+          const Vec3 best = h >= d ? axis : Vec3(-axis);
+          if ((best - u).squaredNorm() > 1e-24 && validBodies(best)) u = best, any = true;
+          continue;
+        }
         const double rho = std::sqrt(d * d - h * h);
         Vec3 perp = (end - pivot) - (end - pivot).dot(axis) * axis;
         if (perp.norm() < 1e-12) perp = axis.unitOrthogonal();
         perp.normalize();
-        // The nearest point of the circle first; if a body is in the way, the other quarter points.
+        // The nearest point of the circle first; if a body is in the way, the points of the circle
+        // farther and farther round from it (steps of pi/16 each way) until one is clear.
         const Vec3 side = axis.cross(perp);
-        const Vec3 options[4] = {perp, side, -side, -perp};
         Vec3 chosen = (h * axis + rho * perp).normalized();
-        for (const Vec3& o : options) {
-          const Vec3 cand = (h * axis + rho * o).normalized();
+        for (int k = 0; k <= 32; ++k) {
+          const double angle = (kPi / 16.0) * ((k + 1) / 2) * (k % 2 ? 1.0 : -1.0);
+          const Vec3 cand = (h * axis + rho * (std::cos(angle) * perp + std::sin(angle) * side)).normalized();
           if (validBodies(cand)) {
             chosen = cand;
             break;
@@ -512,10 +521,10 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   double best_depth = 1e300;
   const Vec3 t1 = base.unitOrthogonal(), t2 = base.cross(t1);
   for (int ring = 0; ring <= 12; ++ring) {
-    const double polar = 3.14159265358979 * ring / 12.0;
+    const double polar = kPi * ring / 12.0;
     const int around = ring == 0 || ring == 12 ? 1 : 24;
     for (int j = 0; j < around; ++j) {
-      const double az = 2.0 * 3.14159265358979 * j / around;
+      const double az = 2.0 * kPi * j / around;
       const Vec3 u = std::cos(polar) * base + std::sin(polar) * (std::cos(az) * t1 + std::sin(az) * t2);
       if (validBodies(u)) return bisect(u);
       double worst = 0.0;
@@ -525,6 +534,54 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
     }
   }
   return best;
+}
+
+bool Simulator::stripOutsideBand(std::size_t strip) const {
+  const Strip& s = hairstyle_.strips[strip];
+  const std::size_t begin = static_cast<std::size_t>(strip_offset_[strip] + s.columns);
+  const std::size_t end = static_cast<std::size_t>(strip_offset_[strip] + s.pointCount());
+  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
+  for (std::size_t i = begin; i < end; ++i)
+    for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
+      const double rest = partner_rest_[static_cast<std::size_t>(q)];
+      if (rest <= 0.0) continue;  // between strips
+      const double dist =
+          (positions_[i] - positions_[static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)])])
+              .norm();
+      if (dist > hi * rest * (1.0 + 1e-9) || dist < lo * rest) return true;
+    }
+  return false;
+}
+
+void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
+                           const std::vector<Ellipsoid>& before) {
+  const Strip& s = hairstyle_.strips[strip];
+  const int offset = strip_offset_[strip];
+  const int saved_collisions = collisions_;
+  for (int pass = 0; pass < 8 && stripOutsideBand(strip); ++pass) {
+    for (int c = 0; c < s.columns; ++c) {
+      for (int r = 1; r < s.rows; ++r) {
+        const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
+        const Vec3& pivot = positions_[static_cast<std::size_t>(offset + s.index(r - 1, c))];
+        const std::size_t local = static_cast<std::size_t>(s.index(r, c));
+        direction_[i] = resolveCollisions(static_cast<int>(i), pivot, length_[i], direction_[i],
+                                          start_pos_[local], now, before);
+        positions_[i] = pivot + length_[i] * direction_[i];
+      }
+    }
+  }
+  collisions_ = saved_collisions;  // the sweep counted the segments turned out of a body
+  const double dt = params_.substep;
+  for (int r = 1; r < s.rows; ++r)
+    for (int c = 0; c < s.columns; ++c) {
+      const std::size_t local = static_cast<std::size_t>(s.index(r, c));
+      const std::size_t i = static_cast<std::size_t>(offset) + local;
+      const Vec3& pivot = positions_[static_cast<std::size_t>(offset + s.index(r - 1, c))];
+      rate_[i] = rotationVectorBetween(start_dir_[local], direction_[i]);
+      const Vec3 mid = pivot + 0.5 * length_[i] * direction_[i];
+      velocity_[i] = (mid - start_mid_[local]) / dt;
+      previous_mid_[i] = mid;
+    }
 }
 
 void Simulator::setShape(const std::vector<Vec3>& target) {
@@ -587,6 +644,10 @@ void Simulator::step(const StepInputs& in) {
         (bodies_.empty() || !have_bodies_before_)
             ? kNone
             : bodies_before_[static_cast<std::size_t>(margin_of_strip_[si])];
+    const auto first = positions_.begin() + offset;
+    start_pos_.assign(first, first + s.pointCount());
+    start_dir_.assign(direction_.begin() + offset, direction_.begin() + offset + s.pointCount());
+    start_mid_.assign(previous_mid_.begin() + offset, previous_mid_.begin() + offset + s.pointCount());
     for (int c = 0; c < s.columns; ++c) {
       Mat3 Q = Mat3::Identity();  // rotation of the parent segment from its styled frame
       std::size_t parent = static_cast<std::size_t>(offset + s.index(0, c));
@@ -646,6 +707,16 @@ void Simulator::step(const StepInputs& in) {
         previous_mid_[i] = mid_next;
         Q = minimalRotation(Q * styled_dir_[i], next) * Q;
         parent = i;
+      }
+    }
+    if (params_.springs_within_strips && stripOutsideBand(si)) {
+      relaxStrip(si, bodies_now, bodies_before);
+      for (int p = s.columns; p < s.pointCount(); ++p) {
+        const std::size_t i = static_cast<std::size_t>(offset + p);
+        max_rate = std::max(max_rate, rate_[i].norm() / dt);
+        for (const Ellipsoid& e : bodies_now)
+          if (e.contains(positions_[i]))
+            max_penetration = std::max(max_penetration, -e.closestPoint(positions_[i]).signed_distance);
       }
     }
     offset += s.pointCount();

@@ -18,7 +18,8 @@ std::string RunSummary::toJson() const {
     << ", \"ns_per_control_point_update\": " << formatDouble(ns_per_control_point_update)
     << ", \"max_segment_rate\": " << formatDouble(max_segment_rate)
     << ", \"max_penetration_m\": " << formatDouble(max_penetration_m)
-    << ", \"min_strip_gap_m\": " << formatDouble(min_strip_gap_m) << ", \"collisions\": " << collisions
+    << ", \"min_strip_gap_m\": " << formatDouble(min_strip_gap_m)
+    << ", \"max_width_ratio\": " << formatDouble(max_width_ratio) << ", \"collisions\": " << collisions
     << ", \"max_mesh_penetration_m\": " << formatDouble(max_mesh_penetration_m)
     << ", \"mesh_vertices_projected\": " << mesh_vertices_projected
     << ", \"mesh_vertices\": " << mesh_vertices << ", \"mesh_triangles\": " << mesh_triangles
@@ -75,6 +76,7 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
       if (!simulator_.springs().empty())
         summary.min_strip_gap_m =
             n == 1 ? simulator_.minStripGap() : std::min(summary.min_strip_gap_m, simulator_.minStripGap());
+      summary.max_width_ratio = std::max(summary.max_width_ratio, simulator_.maxSpringRatio(true));
       summary.collisions += simulator_.collisionCount();
     }
     stepping_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

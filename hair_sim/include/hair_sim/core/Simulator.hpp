@@ -29,8 +29,11 @@
 /// between strips (control points closer than a radius at rest, found through a uniform grid, the
 /// nearest few per point) pull or push along the pair with k_s times the stretch outside the band
 /// [proximity_factor, far_factor] x rest length; their force joins F before the projection (5).
-/// The band is also kept as a constraint on each new end point (bodies take precedence), so strips
-/// never come closer than proximity_factor x rest length nor spread wider than far_factor x it.
+/// The band is also kept as a constraint on each new end point (bodies take precedence): the later
+/// point of each pair in the sweep meets it on the circle of its reachable end points, and a strip
+/// whose width still leaves the band gets Gauss-Seidel passes in which every pair is kept from both
+/// ends, so strips never come closer than proximity_factor x rest length nor spread wider than
+/// far_factor x it.
 #include <vector>
 
 #include "hair_sim/core/dynamics/HeadState.hpp"
@@ -88,11 +91,12 @@ class Simulator {
   const std::vector<SpringPair>& springs() const { return springs_; }
   /// Deepest control point (below the roots) inside any inflated body after the last substep (m, 0 = none).
   double maxPenetration() const { return max_penetration_; }
-  /// Smallest distance between paired control points of different strips after the last substep (m).
+  /// Smallest distance between paired control points of different strips (m), measured when the
+  /// last substep began (so: the state the substep before it left).
   double minStripGap() const { return min_gap_; }
-  /// Smallest distance / rest length over the springs of the given kind after the last substep.
+  /// Smallest distance / rest length over the springs of the given kind, measured as minStripGap().
   double minSpringRatio(bool within_strip) const { return min_ratio_[within_strip ? 1 : 0]; }
-  /// Largest distance / rest length over the springs of the given kind after the last substep.
+  /// Largest distance / rest length over the springs of the given kind, measured as minStripGap().
   double maxSpringRatio(bool within_strip) const { return max_ratio_[within_strip ? 1 : 0]; }
   /// Segments turned out of a body in the last substep.
   int collisionCount() const { return collisions_; }
@@ -116,6 +120,13 @@ class Simulator {
   /// Turns the segment pivot -> pivot + d * dir out of the bodies; returns the corrected direction.
   Vec3 resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir, const Vec3& previous_end,
                          const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
+  /// Is some within-strip pair of the strip outside the band [proximity, far] x rest length?
+  bool stripOutsideBand(std::size_t strip) const;
+  /// Gauss-Seidel passes over a strip whose band does not hold after the sweep: every segment again
+  /// through resolveCollisions from its (possibly moved) pivot, now with every partner in the strip
+  /// already moved, so that each pair is kept from both ends. Then rates and velocities are
+  /// recomputed from the state at the start of the substep (start_*_).
+  void relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
 
   Hairstyle hairstyle_;
   PhysicsParameters params_;
@@ -139,7 +150,9 @@ class Simulator {
   std::vector<Body> bodies_;
   std::vector<SpringPair> springs_;
   std::vector<long> moved_in_step_;  ///< step number in which a point got its final position
-  std::vector<int> partner_start_;   ///< CSR: partners of point k are [start[k], start[k+1])
+  // The current strip at the start of the substep (positions, directions, segment midpoints).
+  std::vector<Vec3> start_pos_, start_dir_, start_mid_;
+  std::vector<int> partner_start_;  ///< CSR: partners of point k are [start[k], start[k+1])
   std::vector<int> partner_index_;
   std::vector<double> partner_rest_;
   // Bodies in the head frame, per distinct margin, now and at the previous substep.

@@ -23,6 +23,7 @@ struct RunSummary {
   double max_segment_rate = 0.0;   ///< rad/s, relative to the head
   double max_penetration_m = 0.0;  ///< deepest control point inside an inflated body over the run
   double min_strip_gap_m = 0.0;    ///< smallest distance between paired points of different strips
+  double max_width_ratio = 0.0;    ///< largest distance / rest length of a within-strip spring pair
   long collisions = 0;             ///< segments turned out of a body, summed over the run
   double max_mesh_penetration_m =
       0.0;                           ///< deepest mesh vertex inside a body (no margin), when meshes are built
