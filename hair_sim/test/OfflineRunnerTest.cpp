@@ -51,6 +51,91 @@ TEST(OfflineRunnerTest, TwoRunsAreBitIdentical) {
     EXPECT_EQ(0, std::memcmp(points.data(), b.at(t).data(), points.size() * sizeof(Vec3))) << t;
 }
 
+/// Mean of the tips (last row) of every strip, head frame, at the first and the last output frame.
+struct TipMotion {
+  Vec3 start, end;
+  std::vector<Iso3> head_poses;  ///< one per output frame
+};
+
+TipMotion tipsOf(const Scenario& scenario) {
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  OfflineRunner runner(config, loadHairstyle(config.hairstyle_file), scenario);
+  TipMotion m;
+  auto meanTip = [&]() {
+    Vec3 sum = Vec3::Zero();
+    int n = 0;
+    const Simulator& sim = runner.simulator();
+    for (std::size_t s = 0; s < sim.hairstyle().strips.size(); ++s) {
+      const Strip& strip = sim.hairstyle().strips[s];
+      for (int c = 0; c < strip.columns; ++c, ++n)
+        sum += sim.positionsHead()[static_cast<std::size_t>(sim.stripOffsets()[s] +
+                                                            strip.index(strip.rows - 1, c))];
+    }
+    return Vec3(sum / n);
+  };
+  runner.run([&](const OutputFrame& f) {
+    if (m.head_poses.empty()) m.start = meanTip();
+    m.end = meanTip();
+    m.head_poses.push_back(f.head_pose);
+  });
+  return m;
+}
+
+Scenario shipped(const std::string& name) {
+  return Scenario::load(test::repoPath("config/scenarios/" + name + ".yaml"));
+}
+
+TEST(OfflineRunnerTest, WindFromBehindBlowsTheTipsForward) {
+  // The head looks along +x; the gusts blow toward +x.
+  const TipMotion m = tipsOf(shipped("wind_from_behind"));
+  const Vec3 moved = m.end - m.start;
+  EXPECT_GT(moved.x(), 0.02) << moved.transpose();
+  EXPECT_GT(moved.x(), 3.0 * std::abs(moved.y())) << moved.transpose();
+}
+
+TEST(OfflineRunnerTest, SidewaysWindBlowsTheTipsSideways) {
+  const TipMotion m = tipsOf(shipped("wind_sideways"));
+  const Vec3 moved = m.end - m.start;
+  EXPECT_GT(moved.y(), 0.02) << moved.transpose();
+  EXPECT_GT(moved.y(), 3.0 * std::abs(moved.x())) << moved.transpose();
+}
+
+TEST(OfflineRunnerTest, GravityEventPointingUpLiftsTheHair) {
+  Scenario s = shipped("still");
+  s.duration = 3.0;
+  Event up;
+  up.type = EventType::Gravity;
+  up.start = 0.5;
+  up.ease = 0.5;
+  up.vector = Vec3(0.0, 0.0, 9.81);
+  s.events.push_back(up);
+  const TipMotion m = tipsOf(s);
+  EXPECT_GT(m.end.z() - m.start.z(), 0.05) << (m.end - m.start).transpose();
+  // Without the event the hair stays where it is.
+  const TipMotion still = tipsOf(shipped("still"));
+  EXPECT_LT((still.end - still.start).norm(), 2e-3);
+}
+
+TEST(OfflineRunnerTest, ShakeEventTurnsTheHeadByItsAmplitudeAtItsFrequency) {
+  // head_shake: shake 0.6 rad at 1.5 Hz from 0.5 s for 2 s with 0.3 s ease; frames at 30 Hz.
+  const TipMotion m = tipsOf(shipped("head_shake"));
+  auto yaw = [&](double t) {
+    const Mat3 r = m.head_poses[static_cast<std::size_t>(std::lround(t * 30.0))].linear();
+    return std::atan2(r(1, 0), r(0, 0));
+  };
+  // Crests a quarter period after each zero crossing, once eased in: +-0.6 rad.
+  EXPECT_NEAR(yaw(0.5 + 1.25 / 1.5), 0.6, 1e-9);
+  EXPECT_NEAR(yaw(0.5 + 1.75 / 1.5), -0.6, 1e-9);
+  EXPECT_NEAR(yaw(0.5 + 2.25 / 1.5), 0.6, 1e-9);
+  // Zero crossings every half period (1/3 s): count sign changes over the full-amplitude part.
+  int crossings = 0;
+  for (double t = 0.8; t + 1.0 / 30.0 <= 2.2; t += 1.0 / 30.0)
+    if ((yaw(t) > 1e-9) != (yaw(t + 1.0 / 30.0) > 1e-9)) ++crossings;
+  EXPECT_EQ(crossings, 5);  // zeros at 0.5 + k / 3 s: 0.83, 1.17, 1.5, 1.83, 2.17 (each counted once)
+  EXPECT_NEAR(yaw(0.4), 0.0, 1e-12);
+  EXPECT_NEAR(yaw(2.6), 0.0, 1e-12);
+}
+
 struct Command {
   int status;
   std::string out;

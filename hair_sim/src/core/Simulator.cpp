@@ -618,7 +618,8 @@ void Simulator::step(const StepInputs& in) {
   const double drag = params_.air_drag;
   const Mat3 Rt = in.head.pose.linear().transpose();
   // World quantities seen from the head frame.
-  const Vec3 g = Rt * params_.gravity;
+  const Vec3 g = Rt * (in.gravity ? *in.gravity : params_.gravity);
+  const bool turbulent = in.turbulence && !in.turbulence->empty();
   const Vec3 acc0 = Rt * in.head.linear_acceleration;
   const Vec3 omega = Rt * in.head.angular_velocity;
   const Vec3 alpha = Rt * in.head.angular_acceleration;
@@ -662,7 +663,8 @@ void Simulator::step(const StepInputs& in) {
         // (6): F = rho d (g + a) + d f with the fictitious acceleration a of the head frame
         // (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the hair.
         const Vec3 a = -acc0 - alpha.cross(mid) - omega.cross(omega.cross(mid)) - 2.0 * omega.cross(v);
-        const Vec3 air = air0 - omega.cross(mid);
+        Vec3 air = air0 - omega.cross(mid);
+        if (turbulent) air += Rt * in.turbulence->at(in.head.pose * mid);
         Vec3 F = rho * d * (g + a) + d * drag * (air - v) + spring_force_[i];
         // (8)-(10): reaction constraint while the control point is inside an inflated body.
         const Vec3 end_now = pivot + d * n;

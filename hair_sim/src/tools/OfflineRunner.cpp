@@ -30,12 +30,19 @@ std::string RunSummary::toJson() const {
 OfflineRunner::OfflineRunner(SimConfig config, Hairstyle hairstyle, Scenario scenario)
     : config_(std::move(config)),
       scenario_(std::move(scenario)),
+      events_(scenario_.schedule()),
       simulator_(std::move(hairstyle), config_.physics, config_.bodies) {
   for (const Body& b : config_.bodies)
     if (b.frame != config_.head_frame && b.frame != config_.world_frame)
       throw std::invalid_argument("bodies: body '" + b.name + "' is in frame '" + b.frame +
                                   "': the offline runner knows only head_frame '" + config_.head_frame +
                                   "' and world_frame '" + config_.world_frame + "'");
+}
+
+Iso3 OfflineRunner::headPose(double t, const EventSample& events) const {
+  Iso3 pose = scenario_.headPose(t);
+  pose.linear() = pose.linear() * events.head_rotation;
+  return pose;
 }
 
 std::vector<Iso3> OfflineRunner::bodyFrames(const Iso3& head_pose) const {
@@ -50,7 +57,7 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
   const double dt = config_.physics.substep;
   simulator_.reset();
   HeadMotionEstimator head;
-  head.reset(scenario_.headPose(0.0));
+  head.reset(headPose(0.0, events_.sample(0.0, config_.physics.gravity)));
   std::vector<Vec3> world;
   RunSummary summary;
   summary.control_points = simulator_.controlPointCount();
@@ -67,8 +74,11 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
       ++n;
       const double t = static_cast<double>(n) * dt;
       StepInputs in;
-      in.head = head.update(scenario_.headPose(t), dt);
-      in.wind = scenario_.windVelocity(t);
+      const EventSample events = events_.sample(t, config_.physics.gravity);
+      in.head = head.update(headPose(t, events), dt);
+      in.wind = scenario_.windVelocity(t) + events.wind;
+      in.turbulence = &events.turbulence;
+      in.gravity = &events.gravity;
       in.body_frames = bodyFrames(in.head.pose);
       simulator_.step(in);
       summary.max_segment_rate = std::max(summary.max_segment_rate, simulator_.maxSegmentRate());

@@ -8,7 +8,7 @@ namespace hair_sim {
 
 Scenario Scenario::load(const std::string& path) {
   const YamlReader y = YamlReader::loadFile(path);
-  y.requireKeys({"duration", "output_rate", "head", "wind"});
+  y.requireKeys({"duration", "output_rate", "head", "wind", "events"});
   Scenario s;
   s.duration = y.getDouble("duration", 1e-3, 86400.0);
   s.output_rate = y.getDouble("output_rate", 0.1, 10000.0, s.output_rate);
@@ -42,6 +42,11 @@ Scenario Scenario::load(const std::string& path) {
       s.wind.push_back(key);
     }
   }
+  if (y.has("events")) {
+    const YamlReader events = y.child("events");
+    events.requireSequence();
+    for (std::size_t i = 0; i < events.size(); ++i) s.events.push_back(Event::fromYaml(events.at(i)));
+  }
   s.validate(path);
   return s;
 }
@@ -60,6 +65,14 @@ void Scenario::validate(const std::string& source) const {
     throw std::invalid_argument(source + ": duration: " + formatDouble(duration) + " must be > 0");
   if (!(output_rate > 0.0))
     throw std::invalid_argument(source + ": output_rate: " + formatDouble(output_rate) + " must be > 0");
+  for (std::size_t i = 0; i < events.size(); ++i)
+    events[i].validate(source + ": events[" + std::to_string(i) + "]");
+}
+
+EventSchedule Scenario::schedule() const {
+  EventSchedule out;
+  for (const Event& e : events) out.add(e);
+  return out;
 }
 
 namespace {

@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "hair_sim/core/dynamics/HeadState.hpp"
+#include "hair_sim/core/events/EventSchedule.hpp"
 #include "hair_sim/core/model/Body.hpp"
 #include "hair_sim/core/model/Hairstyle.hpp"
 #include "hair_sim/core/model/PhysicsParameters.hpp"
@@ -47,6 +48,11 @@ namespace hair_sim {
 struct StepInputs {
   HeadState head;
   Vec3 wind = Vec3::Zero();  ///< air velocity, world frame (m/s)
+  /// Turbulence added to `wind` at each segment's midpoint (world frame), or none.
+  const WindField* turbulence = nullptr;
+  /// Gravitational acceleration (world frame, m/s^2) for this substep; none = parameters().gravity.
+  /// (The rest compensation stays the one for parameters().gravity.)
+  const Vec3* gravity = nullptr;
   /// World pose of each body's frame, in the order of the bodies given to the Simulator.
   std::vector<Iso3> body_frames;
 };

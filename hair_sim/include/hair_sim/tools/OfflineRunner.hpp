@@ -54,6 +54,8 @@ class OfflineRunner {
  public:
   /// Throws std::invalid_argument if a body's frame is neither the config's head_frame nor its world_frame.
   OfflineRunner(SimConfig config, Hairstyle hairstyle, Scenario scenario);
+  /// The head pose at t: the scenario's keyframes turned by the head-motion events.
+  Iso3 headPose(double t, const EventSample& events) const;
   /// World pose of every body's frame for a head pose.
   std::vector<Iso3> bodyFrames(const Iso3& head_pose) const;
   /// Steps the whole scenario; calls on_frame at t = 0, 1/output_rate, ... <= duration. A frame at t
@@ -66,6 +68,7 @@ class OfflineRunner {
  private:
   SimConfig config_;
   Scenario scenario_;
+  EventSchedule events_;
   Simulator simulator_;
 };
 

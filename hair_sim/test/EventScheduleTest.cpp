@@ -1,0 +1,271 @@
+/// Event-triggered primitives: envelopes, gust trains, turbulence, gravity and head motions against
+/// their definitions (numbers from the parameters, not from the code).
+#include "hair_sim/core/events/EventSchedule.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "TestUtil.hpp"
+#include "hair_sim/tools/Scenario.hpp"
+
+namespace hair_sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+const Vec3 kG(0.0, 0.0, -9.81);
+
+Event gust(std::uint64_t seed) {
+  Event e;
+  e.type = EventType::WindGust;
+  e.start = 1.0;
+  e.vector = Vec3(0.0, 3.0, 0.0);  // mean 3 m/s along +y
+  e.peak = 6.0;
+  e.period = 2.0;
+  e.jitter = 0.3;
+  e.seed = seed;
+  return e;
+}
+
+TEST(EventScheduleTest, GustTrainHasItsMeanPeakBaseAndTiming) {
+  const Event e = gust(7);
+  EventSchedule s;
+  s.add(e);
+  const double base = (4.0 * 3.0 - 6.0) / 3.0;  // between gusts: 2 m/s
+  const int periods = 400;
+  const double dt = 1e-3;
+  double sum = 0.0, lowest = 1e9, highest = 0.0;
+  long samples = 0;
+  for (double t = e.start; t < e.start + periods * e.period; t += dt, ++samples) {
+    const Vec3 v = s.sample(t, kG).wind;
+    EXPECT_NEAR(v.x(), 0.0, 1e-12);  // along the mean's direction only
+    sum += v.y();
+    lowest = std::min(lowest, v.y());
+    highest = std::max(highest, v.y());
+  }
+  EXPECT_NEAR(sum / samples, 3.0, 0.01 * 3.0);  // time average = mean within 1 %
+  EXPECT_NEAR(lowest, base, 1e-9);
+  EXPECT_NEAR(highest, 6.0, 1e-4);
+  for (long k = 0; k < periods; ++k) {
+    // Crest k within +-jitter/2 periods of the middle of its period, at the peak speed; a quarter
+    // period either side of it the gust is over (base speed), whatever the jitter.
+    const double crest = EventSchedule::gustCrest(e, k);
+    const double middle = e.start + (k + 0.5) * e.period;
+    ASSERT_LE(std::abs(crest - middle), 0.5 * e.jitter * e.period + 1e-12) << k;
+    EXPECT_NEAR(s.sample(crest, kG).wind.y(), 6.0, 1e-9) << k;
+    EXPECT_NEAR(s.sample(crest + 0.25 * e.period, kG).wind.y(), base, 1e-9) << k;
+  }
+}
+
+TEST(EventScheduleTest, SameSeedSameRunDifferentSeedsDiffer) {
+  EventSchedule a, b, c;
+  a.add(gust(7));
+  b.add(gust(7));
+  c.add(gust(8));
+  Event turbulence;
+  turbulence.type = EventType::Turbulence;
+  turbulence.intensity = 1.0;
+  turbulence.seed = 7;
+  a.add(turbulence);
+  b.add(turbulence);
+  turbulence.seed = 8;
+  c.add(turbulence);
+  double differ = 0.0;
+  for (double t = 0.0; t < 20.0; t += 0.01) {
+    const EventSample sa = a.sample(t, kG), sb = b.sample(t, kG), sc = c.sample(t, kG);
+    const Vec3 p(0.1 * t, 0.2, 1.6);
+    ASSERT_EQ(sa.wind, sb.wind);
+    ASSERT_EQ(sa.turbulence.at(p), sb.turbulence.at(p));
+    differ =
+        std::max(differ, (sa.wind - sc.wind).norm() + (sa.turbulence.at(p) - sc.turbulence.at(p)).norm());
+  }
+  EXPECT_GT(differ, 0.5);
+  EXPECT_NE(EventSchedule::gustCrest(gust(7), 3), EventSchedule::gustCrest(gust(8), 3));
+}
+
+TEST(EventScheduleTest, EnvelopeEasesInAndOutAndHandsOver) {
+  EventSchedule s;
+  Event wind;
+  wind.type = EventType::Wind;
+  wind.start = 2.0;
+  wind.duration = 4.0;
+  wind.ease = 1.0;
+  wind.vector = Vec3(2.0, 0.0, 0.0);
+  s.add(wind);
+  EXPECT_EQ(s.sample(1.999, kG).wind.x(), 0.0);
+  EXPECT_NEAR(s.sample(2.5, kG).wind.x(), 1.0, 1e-12);  // half way through the ease: 0.5 - 0.5 cos(pi/2)
+  EXPECT_NEAR(s.sample(4.0, kG).wind.x(), 2.0, 1e-12);
+  EXPECT_NEAR(s.sample(5.5, kG).wind.x(), 1.0, 1e-12);
+  EXPECT_EQ(s.sample(6.0, kG).wind.x(), 0.0);
+  // Overlapping winds add.
+  Event more = wind;
+  more.vector = Vec3(0.0, 1.0, 0.0);
+  s.add(more);
+  EXPECT_NEAR((s.sample(4.0, kG).wind - Vec3(2.0, 1.0, 0.0)).norm(), 0.0, 1e-12);
+  // Duration 0: until the next of its type, which takes over during its own ease.
+  EventSchedule h;
+  Event up;
+  up.type = EventType::Gravity;
+  up.start = 1.0;
+  up.vector = Vec3(0.0, 0.0, 9.81);
+  h.add(up);
+  Event side = up;
+  side.start = 3.0;
+  side.ease = 2.0;
+  side.vector = Vec3(9.81, 0.0, 0.0);
+  h.add(side);
+  EXPECT_EQ(h.sample(0.5, kG).gravity, kG);
+  EXPECT_EQ(h.sample(2.0, kG).gravity, up.vector);
+  EXPECT_NEAR((h.sample(4.0, kG).gravity - 0.5 * (up.vector + side.vector)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((h.sample(5.0, kG).gravity - side.vector).norm(), 0.0, 1e-12);
+  EXPECT_EQ(h.end(0), 5.0);
+  h.dropEndedBefore(6.0);
+  EXPECT_EQ(h.size(), 1u);
+  EXPECT_NEAR((h.sample(7.0, kG).gravity - side.vector).norm(), 0.0, 1e-12);
+}
+
+TEST(EventScheduleTest, TurbulenceHasItsIntensityAndNoDivergence) {
+  Event e;
+  e.type = EventType::Turbulence;
+  e.intensity = 0.8;
+  e.length_scale = 0.3;
+  e.time_scale = 0.5;
+  EventSchedule s;
+  s.add(e);
+  // RMS per component over many points and times: the intensity (the waves' random orientations
+  // make it exact only on average; 16 waves over 64 seeds stay within 10 %).
+  double sum2 = 0.0;
+  long n = 0;
+  for (std::uint64_t seed = 1; seed <= 64; ++seed) {
+    EventSchedule one;
+    e.seed = seed;
+    one.add(e);
+    for (double t = 0.0; t < 10.0; t += 0.37) {
+      const EventSample sample = one.sample(t, kG);
+      for (int i = 0; i < 4; ++i) {
+        sum2 += sample.turbulence.at(Vec3(0.11 * i, -0.07 * i, 1.6)).squaredNorm();
+        n += 3;
+      }
+    }
+  }
+  EXPECT_NEAR(std::sqrt(sum2 / n), 0.8, 0.08);
+  // Divergence-free (each wave's amplitude is perpendicular to its wave vector): central differences.
+  const EventSample sample = s.sample(1.3, kG);
+  const double h = 1e-5;
+  for (const Vec3& p : {Vec3(0, 0, 1.6), Vec3(0.2, -0.1, 1.5), Vec3(-0.3, 0.4, 1.2)}) {
+    double div = 0.0, scale = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 d = Vec3::Unit(a) * h;
+      const double derivative = (sample.turbulence.at(p + d)[a] - sample.turbulence.at(p - d)[a]) / (2 * h);
+      div += derivative;
+      scale += std::abs(derivative);
+    }
+    EXPECT_LT(std::abs(div), 1e-6 * (1.0 + scale)) << p.transpose();
+  }
+  // Smooth in time: one millisecond changes it by far less than the intensity.
+  const Vec3 p(0.1, 0.1, 1.6);
+  EXPECT_LT((s.sample(2.0, kG).turbulence.at(p) - s.sample(2.001, kG).turbulence.at(p)).norm(), 0.05);
+}
+
+TEST(EventScheduleTest, HeadMotionsTurnByTheirAmplitudeAtTheirFrequencyAndCompose) {
+  Event shake;
+  shake.type = EventType::Shake;
+  shake.start = 1.0;
+  shake.amplitude = 0.5;
+  shake.frequency = 2.0;
+  EventSchedule s;
+  s.add(shake);
+  // yaw = A sin(2 pi f (t - start)): A at a quarter period, 0 at a half, -A at three quarters.
+  auto yaw = [&](double t) {
+    const Mat3 r = s.sample(t, kG).head_rotation;
+    return std::atan2(r(1, 0), r(0, 0));
+  };
+  EXPECT_NEAR(yaw(1.125), 0.5, 1e-12);
+  EXPECT_NEAR(yaw(1.25), 0.0, 1e-12);
+  EXPECT_NEAR(yaw(1.375), -0.5, 1e-12);
+  EXPECT_NEAR(yaw(1.625), 0.5, 1e-12);
+  // A nod on top: the rotations compose in order of start (yaw, then pitch about the turned y).
+  Event nod;
+  nod.type = EventType::Nod;
+  nod.start = 1.0;
+  nod.amplitude = 0.3;
+  nod.frequency = 2.0;
+  s.add(nod);
+  const Mat3 expected =
+      (Eigen::AngleAxisd(0.5, Vec3::UnitZ()) * Eigen::AngleAxisd(0.3, Vec3::UnitY())).toRotationMatrix();
+  EXPECT_TRUE(s.sample(1.125, kG).head_rotation.isApprox(expected, 1e-12));
+  // A turn holds its angle; a tilt rolls.
+  EventSchedule t;
+  Event turn;
+  turn.type = EventType::Turn;
+  turn.amplitude = -0.7;
+  turn.ease = 0.5;
+  t.add(turn);
+  EXPECT_TRUE(t.sample(3.0, kG).head_rotation.isApprox(
+      Eigen::AngleAxisd(-0.7, Vec3::UnitZ()).toRotationMatrix(), 1e-12));
+  Event tilt;
+  tilt.type = EventType::Tilt;
+  tilt.amplitude = 0.2;
+  tilt.frequency = 1.0;
+  EventSchedule u;
+  u.add(tilt);
+  EXPECT_TRUE(u.sample(0.25, kG).head_rotation.isApprox(
+      Eigen::AngleAxisd(0.2, Vec3::UnitX()).toRotationMatrix(), 1e-12));
+  EXPECT_TRUE(isHeadMotion(EventType::Tilt));
+  EXPECT_FALSE(isHeadMotion(EventType::Gravity));
+}
+
+TEST(EventScheduleTest, BadEventsAreNamed) {
+  Event e = gust(1);
+  e.peak = 20.0;  // more than 4 x the mean
+  EXPECT_NE(test::errorOf([&] { EventSchedule().add(e, "msg"); }).find("peak: 20"), std::string::npos);
+  e = gust(1);
+  e.duration = 1.0;
+  e.ease = 0.8;
+  EXPECT_NE(test::errorOf([&] { EventSchedule().add(e, "msg"); }).find("ease: 0.8"), std::string::npos);
+  e = gust(1);
+  e.vector = Vec3(NAN, 0, 0);
+  EXPECT_NE(test::errorOf([&] { EventSchedule().add(e, "msg"); }).find("mean: [nan"), std::string::npos);
+  Event w;
+  w.start = -1.0;
+  EXPECT_NE(test::errorOf([&] { EventSchedule().add(w, "msg"); }).find("start: -1"), std::string::npos);
+  w.start = 0.0;
+  w.vector = Vec3(0, 0, INFINITY);
+  EXPECT_NE(test::errorOf([&] { EventSchedule().add(w, "msg"); }).find("velocity: [0, 0, inf]"),
+            std::string::npos);
+}
+
+TEST(EventScheduleTest, MalformedEventsInAScenarioAreNamed) {
+  const std::string good =
+      "duration: 2.0\noutput_rate: 30\nhead:\n  - {t: 0.0, position: [0, 0, 1.6], rpy: [0, 0, 0]}\n"
+      "events:\n"
+      "  - {type: wind, start: 0.5, ease: 0.2, velocity: [1, 0, 0]}\n"
+      "  - {type: wind_gust, start: 1, mean: [2, 0, 0], peak: 3, period: 1.5, jitter: 0.2, seed: 4}\n"
+      "  - {type: turbulence, start: 0, intensity: 0.5, length_scale: 0.2, time_scale: 0.4, seed: 1}\n"
+      "  - {type: gravity, start: 1, duration: 1, ease: 0.5, acceleration: [0, 0, 9.81]}\n"
+      "  - {type: shake, start: 0, duration: 2, ease: 0.5, amplitude: 0.5, frequency: 2}\n"
+      "  - {type: turn, start: 0, amplitude: 0.5}\n";
+  const std::string path = test::writeTemp("events.yaml", good);
+  const Scenario s = Scenario::load(path);
+  ASSERT_EQ(s.events.size(), 6u);
+  EXPECT_EQ(s.events[1].type, EventType::WindGust);
+  EXPECT_EQ(s.events[1].seed, 4u);
+  EXPECT_EQ(s.schedule().size(), 6u);
+  const std::vector<test::FileEdit> cases = {
+      {"type: wind,", "type: breeze,", "events[0].type", "'breeze'"},
+      {"velocity: [1, 0, 0]", "velocity: [1, 0]", "events[0].velocity", "[1, 0]"},
+      {"velocity: [1, 0, 0]", "velocity: [1, 0, 0], peak: 2", "events[0].peak", "unknown key"},
+      {"peak: 3,", "peak: 30,", "events[1].peak", "30"},
+      {"jitter: 0.2", "jitter: 0.9", "events[1].jitter", "0.9"},
+      {"intensity: 0.5", "intensity: -1", "events[2].intensity", "-1"},
+      {"ease: 0.5, acceleration", "ease: 0.7, acceleration", "events[3].ease", "0.7"},
+      {"frequency: 2}", "frequency: .inf}", "events[4].frequency", ".inf"},
+      {"turn, start: 0, amplitude: 0.5", "turn, start: 0, amplitude: 0.5, frequency: 1",
+       "events[5].frequency", "unknown key"},
+      {"start: 0.5, ease: 0.2", "start: -0.5, ease: 0.2", "events[0].start", "-0.5"},
+  };
+  test::expectEditsNamed(good, cases, [](const std::string& p) { Scenario::load(p); });
+}
+
+}  // namespace
+}  // namespace hair_sim
