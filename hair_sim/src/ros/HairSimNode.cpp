@@ -1,9 +1,7 @@
 #include "hair_sim/ros/HairSimNode.hpp"
 
 #include <geometry_msgs/TransformStamped.h>
-#include <hair_sim_msgs/HairState.h>
 #include <tf2_eigen/tf2_eigen.h>
-#include <visualization_msgs/MarkerArray.h>
 
 #include <cmath>
 #include <stdexcept>
@@ -19,23 +17,6 @@ std::invalid_argument badParam(const std::string& name, const std::string& value
   return std::invalid_argument("parameter ~" + name + ": '" + value + "' " + rule);
 }
 
-geometry_msgs::Point toPoint(const Vec3& p) {
-  geometry_msgs::Point q;
-  q.x = p.x();
-  q.y = p.y();
-  q.z = p.z();
-  return q;
-}
-
-std_msgs::ColorRGBA toColor(const Rgba& c) {
-  std_msgs::ColorRGBA q;
-  q.r = c.r;
-  q.g = c.g;
-  q.b = c.b;
-  q.a = c.a;
-  return q;
-}
-
 }  // namespace
 
 HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
@@ -46,7 +27,10 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   bodies_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("collision_bodies", 1, true);
   state_pub_ = nh_.advertise<hair_sim_msgs::HairState>("hair_state", 2);
   wind_sub_ = nh_.subscribe("wind", 10, &HairSimNode::onWind, this);
+  events_pub_ = nh_.advertise<hair_sim_msgs::HairEvent>("events", 10);
+  events_sub_ = nh_.subscribe("events", 50, &HairSimNode::onEvent, this);
   reset_srv_ = nh_.advertiseService("reset", &HairSimNode::onReset, this);
+  trigger_srv_ = nh_.advertiseService("trigger", &HairSimNode::onTrigger, this);
   timer_ = nh_.createTimer(ros::Duration(1.0 / config_.publish_rate), &HairSimNode::onTimer, this);
   status_since_ = ros::WallTime::now();
   ROS_INFO(
@@ -190,6 +174,74 @@ void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
   turbulence_ = msg->turbulence;
 }
 
+bool HairSimNode::schedule(const hair_sim_msgs::HairEvent& msg, std::string* message) {
+  EventType type;
+  if (parseEventType(msg.type, &type) && isHeadMotion(type)) {
+    *message = "a " + msg.type + " event is for the head driver";
+    return false;
+  }
+  const Vec3 v(msg.vector.x, msg.vector.y, msg.vector.z);
+  Vec3 world = v;
+  const std::string& frame = msg.header.frame_id;
+  if (!frame.empty() && frame != config_.world_frame && v.allFinite()) {
+    Iso3 pose;
+    if (!lookupPose(frame, ros::Time(0), pose)) {
+      *message = "header.frame_id: no tf from '" + frame + "' to '" + config_.world_frame + "'";
+      return false;
+    }
+    world = pose.linear() * v;
+  }
+  const ros::Time start = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
+  Event event;
+  std::string problem;
+  if (!eventFromMsg(msg, world, start.toSec(), &event, &problem)) {
+    *message = problem;
+    return false;
+  }
+  events_.add(event);
+  *message = "scheduled " + msg.type + " at t = " + formatDouble(start.toSec()) + " s" +
+             (event.duration > 0.0 ? " for " + formatDouble(event.duration) + " s" : " until replaced");
+  return true;
+}
+
+void HairSimNode::onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg) {
+  std::string message;
+  if (schedule(*msg, &message)) {
+    ROS_INFO("hair_sim: event: %s", message.c_str());
+    return;
+  }
+  EventType type;
+  if (parseEventType(msg->type, &type) && isHeadMotion(type)) return;  // the head driver's
+  ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a HairEvent (%s): %s", msg->type.c_str(), message.c_str());
+}
+
+bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
+                            hair_sim_msgs::Trigger::Response& response) {
+  EventType type;
+  if (parseEventType(request.event.type, &type) && isHeadMotion(type)) {
+    // Checked here so that the caller hears about a bad value; the head driver schedules it.
+    Event event;
+    std::string problem;
+    const ros::Time start =
+        request.event.header.stamp.isZero() ? ros::Time::now() : request.event.header.stamp;
+    if (!eventFromMsg(request.event, Vec3::Zero(), start.toSec(), &event, &problem)) {
+      response.accepted = false;
+      response.message = problem;
+      return true;
+    }
+    hair_sim_msgs::HairEvent forward = request.event;
+    forward.header.stamp = start;
+    events_pub_.publish(forward);
+    response.accepted = true;
+    response.message = "passed on to the head driver on " + events_pub_.getTopic() +
+                       " (starts at t = " + formatDouble(start.toSec()) + " s)";
+    return true;
+  }
+  response.accepted = schedule(request.event, &response.message);
+  if (response.accepted) ROS_INFO("hair_sim: trigger: %s", response.message.c_str());
+  return true;
+}
+
 bool HairSimNode::onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response) {
   if (request.mode == hair_sim_msgs::Reset::Request::REST_POSE) {
     simulator_->reset();
@@ -231,6 +283,10 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
     if (!lookupPose(config_.head_frame, target, latest_pose)) return;
     simulator_->reset();
     head_.reset(latest_pose);
+    if (started_ && events_.size() > 0) {
+      ROS_WARN("hair_sim: %zu scheduled events dropped with the time jump", events_.size());
+      events_.clear();
+    }
     sim_time_ = target;
     started_ = true;
     ROS_INFO("hair_sim: following %s in %s from t = %.3f", config_.head_frame.c_str(),
@@ -259,13 +315,17 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
     if (!frames_ok) break;
     StepInputs in;
     in.head = head_.update(pose, dt);
-    in.wind = windAt(t.toSec());
+    const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
+    in.wind = windAt(t.toSec()) + events.wind;
+    in.turbulence = &events.turbulence;
+    in.gravity = &events.gravity;
     in.body_frames = frames;
     simulator_->step(in);
     sim_time_ = t;
     last_body_frames_ = frames;
     ++steps;
   }
+  events_.dropEndedBefore(sim_time_.toSec());
   status_steps_ += steps;
   status_step_seconds_ += (ros::WallTime::now() - wall_start).toSec();
   if (last_body_frames_.size() != config_.bodies.size()) {
@@ -292,75 +352,16 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
 void HairSimNode::publishOutputs(const ros::Time& stamp) {
   const Iso3& pose = head_.state().pose;
   simulator_->positionsWorld(pose, world_points_);
-  const std::vector<int>& offsets = simulator_->stripOffsets();
-  const auto& strips = simulator_->hairstyle().strips;
-  if (state_pub_.getNumSubscribers() > 0) {
-    hair_sim_msgs::HairState state;
-    state.header.stamp = stamp;
-    state.header.frame_id = config_.world_frame;
-    state.step = static_cast<std::uint64_t>(simulator_->stepCount());
-    state.strips.resize(strips.size());
-    for (std::size_t s = 0; s < strips.size(); ++s) {
-      hair_sim_msgs::StripState& out = state.strips[s];
-      out.columns = static_cast<std::uint32_t>(strips[s].columns);
-      out.rows = static_cast<std::uint32_t>(strips[s].rows);
-      out.hair_length = strips[s].hair_length;
-      out.points.reserve(static_cast<std::size_t>(strips[s].pointCount()));
-      for (int p = 0; p < strips[s].pointCount(); ++p)
-        out.points.push_back(toPoint(world_points_[static_cast<std::size_t>(offsets[s] + p)]));
-    }
-    state_pub_.publish(state);
-  }
+  if (state_pub_.getNumSubscribers() > 0)
+    state_pub_.publish(makeHairState(*simulator_, world_points_, config_.world_frame, stamp));
   if (markers_pub_.getNumSubscribers() == 0) return;
   std::vector<Ellipsoid> bodies;
   for (std::size_t b = 0; b < config_.bodies.size() && b < last_body_frames_.size(); ++b)
     bodies.push_back(config_.bodies[b].shape.transformed(last_body_frames_[b]));
-  meshes_->build(world_points_, offsets, simulator_->hairstyle().scalp.transformed(pose), bodies);
-  visualization_msgs::MarkerArray array;
-  visualization_msgs::Marker base;
-  base.header.stamp = stamp;
-  base.header.frame_id = config_.world_frame;
-  base.pose.orientation.w = 1.0;
-  base.scale.x = base.scale.y = base.scale.z = 1.0;
-  base.color.r = base.color.g = base.color.b = base.color.a = 1.0f;
-  base.action = visualization_msgs::Marker::ADD;
-  if (render_mode_ != RenderMode::Strands) {
-    // One merged TRIANGLE_LIST: every strip, both windings (both faces visible), per-vertex RGBA.
-    visualization_msgs::Marker m = base;
-    m.ns = "hair";
-    m.id = 0;
-    m.type = visualization_msgs::Marker::TRIANGLE_LIST;
-    std::vector<std::uint32_t> indices;
-    for (std::size_t s = 0; s < meshes_->meshes().size(); ++s) {
-      const StripMesh& mesh = meshes_->meshes()[s];
-      const std::vector<Rgba>& colours = meshes_->colours()[s];
-      indices.clear();
-      Tessellator::appendTriangles(mesh, 0, true, indices);
-      for (std::uint32_t k : indices) {
-        m.points.push_back(toPoint(mesh.positions[k]));
-        m.colors.push_back(toColor(colours[k]));
-      }
-    }
-    array.markers.push_back(m);
-  }
-  if (render_mode_ != RenderMode::Mesh) {
-    visualization_msgs::Marker m = base;
-    m.ns = "strands";
-    m.id = 0;
-    m.type = visualization_msgs::Marker::LINE_LIST;
-    m.scale.x = 0.0015;  // line width (m)
-    std::vector<Vec3> points;
-    std::vector<Rgba> colours;
-    for (std::size_t s = 0; s < meshes_->meshes().size(); ++s)
-      HairLook::strandLines(meshes_->meshes()[s], strands_per_strip_, points, &meshes_->colours()[s],
-                            &colours);
-    for (std::size_t k = 0; k < points.size(); ++k) {
-      m.points.push_back(toPoint(points[k]));
-      m.colors.push_back(toColor(colours[k]));
-    }
-    array.markers.push_back(m);
-  }
-  markers_pub_.publish(array);
+  meshes_->build(world_points_, simulator_->stripOffsets(), simulator_->hairstyle().scalp.transformed(pose),
+                 bodies);
+  markers_pub_.publish(
+      makeHairMarkers(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp));
 }
 
 void HairSimNode::publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames) {
@@ -370,35 +371,8 @@ void HairSimNode::publishBodies(const ros::Time& stamp, const std::vector<Iso3>&
     changed = (frames[b].matrix() - published_body_frames_[b].matrix()).cwiseAbs().maxCoeff() > 1e-6;
   if (!changed) return;
   published_body_frames_ = frames;
-  visualization_msgs::MarkerArray array;
-  for (std::size_t b = 0; b < config_.bodies.size() && b < frames.size(); ++b) {
-    const Body& body = config_.bodies[b];
-    const Ellipsoid e = body.shape.transformed(frames[b]);
-    visualization_msgs::Marker m;
-    m.header.stamp = stamp;
-    m.header.frame_id = config_.world_frame;
-    m.ns = "bodies";
-    m.id = static_cast<int>(b);
-    m.type = visualization_msgs::Marker::SPHERE;
-    m.action = visualization_msgs::Marker::ADD;
-    m.pose.position = toPoint(e.center());
-    const Eigen::Quaterniond q(e.rotation());
-    m.pose.orientation.x = q.x();
-    m.pose.orientation.y = q.y();
-    m.pose.orientation.z = q.z();
-    m.pose.orientation.w = q.w();
-    m.scale.x = 2.0 * e.radii().x();
-    m.scale.y = 2.0 * e.radii().y();
-    m.scale.z = 2.0 * e.radii().z();
-    // The head opaque (the hair sits on a visible head), the rest of the body translucent.
-    const bool head = body.frame == config_.head_frame;
-    m.color.r = 0.85f;
-    m.color.g = 0.68f;
-    m.color.b = 0.56f;
-    m.color.a = head ? 1.0f : 0.45f;
-    array.markers.push_back(m);
-  }
-  bodies_pub_.publish(array);
+  bodies_pub_.publish(
+      makeBodyMarkers(config_.bodies, frames, config_.head_frame, config_.world_frame, stamp));
 }
 
 }  // namespace hair_sim

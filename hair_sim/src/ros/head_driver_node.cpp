@@ -24,7 +24,13 @@
 /// default "nod,shake,turn"; also a YAML list; empty = sway only), translate_distance (m, 0.3),
 /// translate_duration (s, 0.5), translate_start (s, 2.0).
 /// A bad value logs ROS_FATAL naming the parameter and its value, and the node exits with status 1.
+///
+/// Head-motion events (hair_sim_msgs/HairEvent of type nod, shake, turn or tilt on the topic `events`,
+/// also what hair_sim_node's `trigger` service passes on) turn the head about its origin on top of the
+/// mode's motion, from their stamp (zero = on receipt), composed in order of start; other types are
+/// hair_sim_node's and are ignored here.
 #include <geometry_msgs/TransformStamped.h>
+#include <hair_sim_msgs/HairEvent.h>
 #include <ros/ros.h>
 #include <tf2/LinearMath/Quaternion.h>
 #include <tf2_ros/transform_broadcaster.h>
@@ -39,6 +45,9 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "hair_sim/core/events/EventSchedule.hpp"
+#include "hair_sim/ros/HairMessages.hpp"
 
 namespace head_driver {
 
@@ -223,6 +232,7 @@ class HeadDriver {
   HeadDriver(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(nh), pnh_(private_nh) {
     readParameters();
     timer_ = nh_.createTimer(ros::Duration(1.0 / rate_), &HeadDriver::onTimer, this);
+    events_sub_ = nh_.subscribe("events", 50, &HeadDriver::onEvent, this);
   }
 
  private:
@@ -372,6 +382,22 @@ class HeadDriver {
       ROS_INFO("head_driver: ~motions is empty: idle sway only");
   }
 
+  void onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg) {
+    hair_sim::EventType type;
+    if (hair_sim::parseEventType(msg->type, &type) && !hair_sim::isHeadMotion(type)) return;  // the hair's
+    const ros::Time start = msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp;
+    hair_sim::Event event;
+    std::string problem;
+    if (!hair_sim::eventFromMsg(*msg, hair_sim::Vec3::Zero(), start.toSec(), &event, &problem)) {
+      ROS_WARN_THROTTLE(2.0, "head_driver: ignored a HairEvent (%s): %s", msg->type.c_str(), problem.c_str());
+      return;
+    }
+    events_.add(event);
+    ROS_INFO("head_driver: %s of %.3f rad at %.3f Hz from t = %.3f s%s", msg->type.c_str(), event.amplitude,
+             event.frequency, start.toSec(),
+             event.duration > 0.0 ? (" for " + toString(event.duration) + " s").c_str() : " until replaced");
+  }
+
   void onTimer(const ros::TimerEvent&) {
     const ros::Time now = ros::Time::now();
     if (now.isZero()) return;  // simulated time not yet received
@@ -380,9 +406,10 @@ class HeadDriver {
       last_stamp_ = ros::Time();
     }
     if (now < last_stamp_) {
-      ROS_WARN("head_driver: time went backwards (%.3f -> %.3f): starting the motion again",
-               last_stamp_.toSec(), now.toSec());
+      ROS_WARN("head_driver: time went backwards (%.3f -> %.3f): starting the motion again%s",
+               last_stamp_.toSec(), now.toSec(), events_.size() > 0 ? ", events dropped" : "");
       start_ = now;
+      events_.clear();
     } else if (now == last_stamp_) {
       return;  // same stamp twice (simulated clock slower than the rate): tf2 would reject it
     }
@@ -397,6 +424,11 @@ class HeadDriver {
     msg.transform.translation.z = pose.z;
     tf2::Quaternion q;
     q.setRPY(pose.roll, pose.pitch, pose.yaw);
+    if (events_.size() > 0) {
+      const Eigen::Quaterniond turn(events_.sample(now.toSec(), hair_sim::Vec3::Zero()).head_rotation);
+      q = q * tf2::Quaternion(turn.x(), turn.y(), turn.z(), turn.w());
+      events_.dropEndedBefore(now.toSec());
+    }
     q.normalize();
     msg.transform.rotation.x = q.x();
     msg.transform.rotation.y = q.y();
@@ -408,6 +440,8 @@ class HeadDriver {
   ros::NodeHandle nh_, pnh_;
   tf2_ros::TransformBroadcaster broadcaster_;
   ros::Timer timer_;
+  ros::Subscriber events_sub_;
+  hair_sim::EventSchedule events_;  ///< head motions, in seconds of ROS time
   MotionSettings settings_;
   std::string world_frame_ = "world";
   std::string head_frame_ = "head";

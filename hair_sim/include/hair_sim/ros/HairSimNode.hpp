@@ -1,7 +1,9 @@
 #pragma once
 /// ROS glue of hair_sim: parameters, the head pose through tf2, wind commands, the fixed-step loop,
 /// markers and state out, the reset service. The physics lives in the ROS-free core.
+#include <hair_sim_msgs/HairEvent.h>
 #include <hair_sim_msgs/Reset.h>
+#include <hair_sim_msgs/Trigger.h>
 #include <hair_sim_msgs/Wind.h>
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
@@ -12,8 +14,10 @@
 #include <vector>
 
 #include "hair_sim/core/Simulator.hpp"
+#include "hair_sim/core/events/EventSchedule.hpp"
 #include "hair_sim/core/geometry/HairMeshBuilder.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
+#include "hair_sim/ros/HairMessages.hpp"
 
 namespace hair_sim {
 
@@ -24,13 +28,16 @@ class HairSimNode {
   HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
 
  private:
-  enum class RenderMode { Mesh, Strands, Both };
-
   void readParameters();
   void rebuild(Hairstyle hairstyle);
   void onTimer(const ros::TimerEvent& event);
   void onWind(const hair_sim_msgs::Wind::ConstPtr& msg);
   bool onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response);
+  void onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg);
+  bool onTrigger(hair_sim_msgs::Trigger::Request& request, hair_sim_msgs::Trigger::Response& response);
+  /// Schedules a wind, turbulence or gravity event (head motions: false, "for the head driver").
+  /// Returns whether it was accepted; `message` says what was done or what was wrong.
+  bool schedule(const hair_sim_msgs::HairEvent& msg, std::string* message);
   /// The one place that asks tf: pose of `frame` in world_frame at `stamp`; on failure warns at most
   /// every few seconds (naming both frames and tf's reason) and returns false. stamp 0 = the newest;
   /// `found` receives the stamp of the transform used.
@@ -42,9 +49,9 @@ class HairSimNode {
   ros::NodeHandle nh_, pnh_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  ros::Subscriber wind_sub_;
-  ros::Publisher markers_pub_, bodies_pub_, state_pub_;
-  ros::ServiceServer reset_srv_;
+  ros::Subscriber wind_sub_, events_sub_;
+  ros::Publisher markers_pub_, bodies_pub_, state_pub_, events_pub_;
+  ros::ServiceServer reset_srv_, trigger_srv_;
   ros::Timer timer_;
 
   std::string config_file_;
@@ -69,6 +76,8 @@ class HairSimNode {
   double wind_start_ = 0.0;
   double wind_ramp_ = 0.0;
   double turbulence_ = 0.0;
+  // Events (wind, wind_gust, turbulence, gravity), timed in seconds of ROS time.
+  EventSchedule events_;
 
   // Status.
   ros::WallTime status_since_;

@@ -1,0 +1,146 @@
+#!/usr/bin/python3
+"""rostest node for event_checks.test: hair_sim_node and head_driver (mode still) take events.
+
+  test_a_event_takes_effect_at_its_stamp
+      Publishes a wind HairEvent (4 m/s along +x, no ease) stamped 2 s ahead on `events`. Every
+      hair_state stamped before the event's stamp has the mean tip within 0.5 mm of where it was; the
+      first state in which the mean tip has moved 0.5 mm is stamped within 0.25 s after the event's
+      stamp, and 1.5 s after it the tips have moved more than 1 cm along +x.
+  test_b_trigger_gravity_lifts_the_hair
+      `trigger` with gravity (0, 0, +9.81) for 3 s: accepted; within 2 s the mean tip rises by 2 cm.
+  test_c_trigger_shake_turns_the_head
+      `trigger` with a shake (0.4 rad, 1 Hz, 3 s, ease 0.25 s): accepted and passed on to head_driver;
+      the head's yaw in tf reaches 0.4 rad (within 0.02) either way.
+  test_d_bad_events_are_rejected
+      `trigger` with a NaN wind, an unknown type and a gust peak above 4 x its mean: each rejected with
+      the field named; the node keeps publishing.
+"""
+import math
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+import tf2_ros
+from geometry_msgs.msg import Vector3
+from hair_sim_msgs.msg import HairEvent, HairState
+from hair_sim_msgs.srv import Trigger
+
+NAME = 'event_checks'
+
+
+def mean_tip(state):
+    xs, ys, zs = [], [], []
+    for strip in state.strips:
+        for p in strip.points[-strip.columns:]:  # last row
+            xs.append(p.x)
+            ys.append(p.y)
+            zs.append(p.z)
+    return (sum(xs) / len(xs), sum(ys) / len(ys), sum(zs) / len(zs))
+
+
+class EventChecks(unittest.TestCase):
+    lock = threading.Lock()
+    states = []  # (stamp seconds, mean tip)
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node(NAME)
+        cls.tf_buffer = tf2_ros.Buffer()
+        cls.tf_listener = tf2_ros.TransformListener(cls.tf_buffer)
+        cls.sub = rospy.Subscriber('hair_state', HairState, cls.on_state, queue_size=50)
+        cls.events = rospy.Publisher('events', HairEvent, queue_size=10)
+        rospy.wait_for_service('trigger', timeout=30.0)
+        cls.trigger = rospy.ServiceProxy('trigger', Trigger)
+        deadline = time.time() + 30.0
+        while time.time() < deadline and (len(cls.snapshot()) < 30 or cls.events.get_num_connections() < 2):
+            time.sleep(0.1)
+
+    @classmethod
+    def on_state(cls, msg):
+        with cls.lock:
+            cls.states.append((msg.header.stamp.to_sec(), mean_tip(msg)))
+
+    @classmethod
+    def snapshot(cls):
+        with cls.lock:
+            return list(cls.states)
+
+    def wait_until(self, stamp):
+        deadline = time.time() + 30.0
+        while time.time() < deadline:
+            states = self.snapshot()
+            if states and states[-1][0] >= stamp:
+                return states
+            time.sleep(0.05)
+        self.fail('no hair_state stamped after %.3f' % stamp)
+
+    def test_a_event_takes_effect_at_its_stamp(self):
+        states = self.snapshot()
+        self.assertGreaterEqual(len(states), 30, 'hair_state is not being published')
+        before = states[-1][1]
+        event = HairEvent(type='wind', vector=Vector3(4.0, 0.0, 0.0))
+        event.header.stamp = rospy.Time.now() + rospy.Duration(2.0)
+        stamp = event.header.stamp.to_sec()
+        self.events.publish(event)
+        states = self.wait_until(stamp + 1.5)
+        first_moved = None
+        for t, tip in states:
+            moved = math.dist(tip, before)
+            if t < stamp:
+                self.assertLess(moved, 5e-4, 'the hair moved %.4f m at %.3f, before the event at %.3f' % (moved, t, stamp))
+            elif first_moved is None and moved > 5e-4:
+                first_moved = t
+        self.assertIsNotNone(first_moved, 'the wind event had no effect')
+        rospy.loginfo('%s: event stamped %.3f, hair moved from %.3f', NAME, stamp, first_moved)
+        self.assertLess(first_moved - stamp, 0.25)
+        self.assertGreater(states[-1][1][0] - before[0], 0.01)
+        # Still air again (replaces the wind), and let the hair settle.
+        self.events.publish(HairEvent(type='wind', ease=0.5))
+        time.sleep(3.0)
+
+    def test_b_trigger_gravity_lifts_the_hair(self):
+        before = self.snapshot()[-1][1]
+        reply = self.trigger(HairEvent(type='gravity', duration=3.0, ease=0.3, vector=Vector3(0.0, 0.0, 9.81)))
+        self.assertTrue(reply.accepted, reply.message)
+        now = rospy.Time.now().to_sec()
+        states = self.wait_until(now + 2.0)
+        self.assertGreater(max(tip[2] for t, tip in states if t > now) - before[2], 0.02)
+        time.sleep(3.0)
+
+    def test_c_trigger_shake_turns_the_head(self):
+        reply = self.trigger(HairEvent(type='shake', duration=3.0, ease=0.25, amplitude=0.4, frequency=1.0))
+        self.assertTrue(reply.accepted, reply.message)
+        self.assertIn('head driver', reply.message)
+        yaws = []
+        deadline = time.time() + 3.0
+        while time.time() < deadline:
+            try:
+                q = self.tf_buffer.lookup_transform('world', 'head', rospy.Time(0)).transform.rotation
+                yaws.append(math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z)))
+            except tf2_ros.TransformException:
+                pass
+            time.sleep(0.01)
+        self.assertGreater(len(yaws), 50)
+        self.assertAlmostEqual(max(yaws), 0.4, delta=0.02)
+        self.assertAlmostEqual(min(yaws), -0.4, delta=0.02)
+
+    def test_d_bad_events_are_rejected(self):
+        cases = [
+            (HairEvent(type='wind', vector=Vector3(float('nan'), 0.0, 0.0)), 'velocity: [nan'),
+            (HairEvent(type='breeze'), "type: 'breeze'"),
+            (HairEvent(type='wind_gust', vector=Vector3(1.0, 0.0, 0.0), peak=9.0, period=1.0), 'peak: 9'),
+            (HairEvent(type='nod', amplitude=0.2, frequency=float('inf')), 'frequency: inf'),
+        ]
+        for event, named in cases:
+            reply = self.trigger(event)
+            self.assertFalse(reply.accepted, event.type)
+            self.assertIn(named, reply.message)
+        count = len(self.snapshot())
+        time.sleep(1.0)
+        self.assertGreater(len(self.snapshot()), count + 10, 'the node stopped publishing')
+
+
+if __name__ == '__main__':
+    rostest.rosrun('hair_sim', NAME, EventChecks)
