@@ -367,31 +367,48 @@ bool pathEntersUnitSphere(const Vec3& q0, const Vec3& q1) {
   return t <= 1.0;
 }
 
-/// Does the straight segment p0 -> p1 cut through the body (p0 outside)?
-bool segmentCrosses(const Ellipsoid& e, const Vec3& p0, const Vec3& p1) {
-  return pathEntersUnitSphere(e.toSphere(p0), e.toSphere(p1));
-}
-
 }  // namespace
 
 Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
                                   const Vec3& previous_end, const std::vector<Ellipsoid>& now,
                                   const std::vector<Ellipsoid>& before) {
   const std::size_t nb = now.size();
+  // In the sphere space of body b the end of direction u is q_pivot + d Sinv u, so the pivot and the
+  // previous end are mapped once per point. A body is out of reach when the ball that holds every
+  // end, every segment and every path from the previous end (centre q_pivot, radius
+  // max(d / smallest radius, |q_prev - q_pivot|)) lies outside the unit sphere: then nothing below
+  // can fail for it, and it is skipped.
+  near_.clear();
+  is_near_.assign(nb, 0);
+  q_pivot_.resize(nb);
+  q_prev_.resize(nb);
+  pivot_inside_.resize(nb);
+  for (std::size_t b = 0; b < nb; ++b) {
+    q_pivot_[b] = now[b].toSphere(pivot);
+    const double reach_end = d / now[b].radii().minCoeff();
+    double reach = reach_end;
+    if (!before.empty()) {
+      q_prev_[b] = before[b].toSphere(previous_end);
+      reach = std::max(reach, (q_prev_[b] - q_pivot_[b]).norm());
+    }
+    pivot_inside_[b] = q_pivot_[b].squaredNorm() < 1.0;
+    if (q_pivot_[b].norm() > 1.0 + reach + 1e-9) continue;
+    near_.push_back(b);
+    is_near_[b] = 1;
+  }
   // Validity for one body: end outside, segment not cutting through it (pivot outside), and the end's
   // path over the substep, relative to the moving body, not entering it (the paper's ray test).
   auto validFor = [&](std::size_t b, const Vec3& u) {
-    const Ellipsoid& e = now[b];
-    const Vec3 end = pivot + d * u;
-    if (e.implicitValue(end) <= 1e-12) return false;
-    if (e.contains(pivot)) return true;  // a root inside its inflated scalp: only the end point counts
-    if (segmentCrosses(e, pivot, end)) return false;
-    if (!before.empty() && pathEntersUnitSphere(before[b].toSphere(previous_end), e.toSphere(end)))
-      return false;
+    if (!is_near_[b]) return true;
+    const Vec3 q_end = q_pivot_[b] + d * (now[b].Sinv() * u);
+    if (q_end.squaredNorm() - 1.0 <= 1e-12) return false;
+    if (pivot_inside_[b]) return true;  // a root inside its inflated scalp: only the end point counts
+    if (pathEntersUnitSphere(q_pivot_[b], q_end)) return false;  // the segment cuts through
+    if (!before.empty() && pathEntersUnitSphere(q_prev_[b], q_end)) return false;
     return true;
   };
   auto validBodies = [&](const Vec3& u) {
-    for (std::size_t b = 0; b < nb; ++b)
+    for (std::size_t b : near_)
       if (!validFor(b, u)) return false;
     return true;
   };
@@ -616,6 +633,8 @@ void Simulator::step(const StepInputs& in) {
   const double k = params_.hinge_stiffness;
   const double gamma = params_.hinge_damping;
   const double drag = params_.air_drag;
+  // Slightly above cos(max_bend), so that rounding never skips an angle just over the limit.
+  const double cos_max_bend = std::cos(params_.max_bend) + 1e-12;
   const Mat3 Rt = in.head.pose.linear().transpose();
   // World quantities seen from the head frame.
   const Vec3 g = Rt * (in.gravity ? *in.gravity : params_.gravity);
@@ -685,11 +704,14 @@ void Simulator::step(const StepInputs& in) {
         const double step_angle = w.norm();
         if (step_angle > params_.max_angle_step) w *= params_.max_angle_step / step_angle;
         Vec3 next = rotateByVector(w, n).normalized();
-        // Bend limit relative to the rest direction keeps the hinge away from a fold-back.
-        const Vec3 bend = rotationVectorBetween(rest, next);
-        const double bend_angle = bend.norm();
-        if (bend_angle > params_.max_bend)
-          next = rotateByVector(bend * (params_.max_bend / bend_angle), rest);
+        // Bend limit relative to the rest direction keeps the hinge away from a fold-back (the angle
+        // is only needed when the cosine says it may be over the limit).
+        if (rest.dot(next) < cos_max_bend) {
+          const Vec3 bend = rotationVectorBetween(rest, next);
+          const double bend_angle = bend.norm();
+          if (bend_angle > params_.max_bend)
+            next = rotateByVector(bend * (params_.max_bend / bend_angle), rest);
+        }
         if (!bodies_now.empty() || partner_start_[i + 1] > partner_start_[i]) {
           next = resolveCollisions(static_cast<int>(i), pivot, d, next, positions_[i], bodies_now,
                                    bodies_before);

@@ -156,6 +156,11 @@ class Simulator {
   std::vector<Body> bodies_;
   std::vector<SpringPair> springs_;
   std::vector<long> moved_in_step_;  ///< step number in which a point got its final position
+  // resolveCollisions: the bodies within reach of the segment, the pivot and the previous end in the
+  // sphere space of each body.
+  std::vector<std::size_t> near_;
+  std::vector<Vec3> q_pivot_, q_prev_;
+  std::vector<char> pivot_inside_, is_near_;
   // The current strip at the start of the substep (positions, directions, segment midpoints).
   std::vector<Vec3> start_pos_, start_dir_, start_mid_;
   std::vector<int> partner_start_;  ///< CSR: partners of point k are [start[k], start[k+1])
