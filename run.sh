@@ -63,9 +63,13 @@ case "$cmd" in
     mkdir -p build-release
     cmake -S . -B build-release -DCMAKE_BUILD_TYPE=Release -DCATKIN_DEVEL_PREFIX="$ROOT/build-release/devel" \
       -DCATKIN_ENABLE_TESTING=OFF >build-release/cmake.log 2>&1
-    cmake --build build-release -j"$(nproc)" --target hair_sim_bench
-    build-release/devel/lib/hair_sim/hair_sim_bench --benchmark_repetitions="${REPETITIONS:-3}" \
-      --benchmark_report_aggregates_only=true "${@:2}"
+    if [ $# -gt 1 ]; then  # flags: hair_sim_bench alone with them
+      cmake --build build-release -j"$(nproc)" --target hair_sim_bench
+      exec build-release/devel/lib/hair_sim/hair_sim_bench --benchmark_repetitions="${REPETITIONS:-3}" \
+        --benchmark_report_aggregates_only=true "${@:2}"
+    fi
+    cmake --build build-release -j"$(nproc)"
+    exec scripts/bench.sh
     ;;
   test)
     install_deps

@@ -1,0 +1,56 @@
+#!/usr/bin/python3
+"""Turns the Google Benchmark JSON of hair_sim_bench and the node measurement of bench_node.py into
+the benchmark table (markdown) of docs/benchmarks.md. Usage: bench_table.py BENCH.json NODE.json"""
+import json
+import sys
+
+SUBSTEP_RATE = 240.0
+
+
+def medians(path):
+    with open(path) as f:
+        data = json.load(f)
+    out = {}
+    for b in data['benchmarks']:
+        if b.get('run_type') == 'aggregate' and b.get('aggregate_name') != 'median':
+            continue
+        out[b.get('run_name', b['name'])] = b
+    return data.get('context', {}), out
+
+
+def main():
+    context, bench = medians(sys.argv[1])
+    node = {}
+    if len(sys.argv) > 2:
+        with open(sys.argv[2]) as f:
+            node = json.load(f)
+    lines = ['| strips | control points | ns per control-point update | real-time factor at 240 Hz |',
+             '|---|---|---|---|']
+    for name in sorted((n for n in bench if n.startswith('BM_Step/')), key=lambda n: int(n.split('/')[1])):
+        b = bench[name]
+        ns = 1e9 / b['items_per_second']
+        points = int(b['control_points'])
+        lines.append('| %s | %s | %.0f | %.2f |' % (format(int(b['strips']), ','), format(points, ','), ns,
+                                                     1.0 / (ns * 1e-9 * points * SUBSTEP_RATE)))
+    lines += ['', '| tessellation (default hairstyle and level of detail) | ns per vertex |', '|---|---|']
+    for name in ('BM_Tessellate_CachedBasis', 'BM_Tessellate_ForwardDifferencing', 'BM_Tessellate_DeBoor'):
+        if name in bench:
+            lines.append('| %s | %.1f |' % (name.replace('BM_Tessellate_', ''), 1e9 / bench[name]['items_per_second']))
+    if node and 'error' not in node:
+        lines += ['', '| node (default hairstyle, 30 Hz, markers subscribed) | value |', '|---|---|',
+                  '| CPU share of one core | %.1f %% |' % (100.0 * node['cpu_share']),
+                  '| hair_markers rate | %.1f Hz |' % node['rate_hz'],
+                  '| latency tf -> markers, median / p99 / max | %.1f / %.1f / %.1f ms |' % (
+                      node['latency_ms_p50'], node['latency_ms_p99'], node['latency_ms_max']),
+                  '| bytes per hair_markers message | %s |' % format(int(node['bytes_per_message']), ',')]
+    elif node:
+        lines += ['', 'node: ' + node['error']]
+    cpu = context.get('mhz_per_cpu')
+    lines += ['', 'Machine: %s CPUs%s; Release build; medians of %s repetitions (%s).' % (
+        context.get('num_cpus', '?'), ' at %s MHz' % cpu if cpu else '',
+        bench[next(iter(bench))].get('repetitions', '?') if bench else '?', context.get('date', ''))]
+    print('\n'.join(lines))
+
+
+if __name__ == '__main__':
+    main()
