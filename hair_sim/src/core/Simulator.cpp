@@ -369,9 +369,8 @@ bool pathEntersUnitSphere(const Vec3& q0, const Vec3& q1) {
 
 }  // namespace
 
-Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
-                                  const Vec3& previous_end, const std::vector<Ellipsoid>& now,
-                                  const std::vector<Ellipsoid>& before) {
+void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_end,
+                              const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
   const std::size_t nb = now.size();
   // In the sphere space of body b the end of direction u is q_pivot + d Sinv u, so the pivot and the
   // previous end are mapped once per point. A body is out of reach when the ball that holds every
@@ -396,6 +395,10 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
     near_.push_back(b);
     is_near_[b] = 1;
   }
+}
+
+Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
+                                  const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
   // Validity for one body: end outside, segment not cutting through it (pivot outside), and the end's
   // path over the substep, relative to the moving body, not entering it (the paper's ray test).
   auto validFor = [&](std::size_t b, const Vec3& u) {
@@ -581,8 +584,8 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
         const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
         const Vec3& pivot = positions_[static_cast<std::size_t>(offset + s.index(r - 1, c))];
         const std::size_t local = static_cast<std::size_t>(s.index(r, c));
-        direction_[i] = resolveCollisions(static_cast<int>(i), pivot, length_[i], direction_[i],
-                                          start_pos_[local], now, before);
+        prepareBodies(pivot, length_[i], start_pos_[local], now, before);
+        direction_[i] = resolveCollisions(static_cast<int>(i), pivot, length_[i], direction_[i], now, before);
         positions_[i] = pivot + length_[i] * direction_[i];
       }
     }
@@ -685,10 +688,13 @@ void Simulator::step(const StepInputs& in) {
         Vec3 air = air0 - omega.cross(mid);
         if (turbulent) air += Rt * in.turbulence->at(in.head.pose * mid);
         Vec3 F = rho * d * (g + a) + d * drag * (air - v) + spring_force_[i];
-        // (8)-(10): reaction constraint while the control point is inside an inflated body.
+        // (8)-(10): reaction constraint while the control point is inside an inflated body (only a
+        // body within the segment's reach can hold it).
         const Vec3 end_now = pivot + d * n;
-        for (const Ellipsoid& e : bodies_now) {
-          if (!e.contains(end_now)) continue;
+        prepareBodies(pivot, d, positions_[i], bodies_now, bodies_before);
+        for (std::size_t b : near_) {
+          const Ellipsoid& e = bodies_now[b];
+          if ((q_pivot_[b] + d * (e.Sinv() * n)).squaredNorm() >= 1.0) continue;
           const Ellipsoid::ClosestPoint cp = e.closestPoint(end_now);
           const Vec3 v_end = (end_now - positions_[i]) / dt;
           F = reactionForce(F, -cp.normal, -cp.signed_distance, v_end, k_c, c_c);
@@ -699,11 +705,14 @@ void Simulator::step(const StepInputs& in) {
         const Vec3 rest = (r == 1) ? rest_dir_[i] : Vec3(Q * rest_dir_[i]);
         M -= k * rotationVectorBetween(rest, n);
         M -= M.dot(n) * n;
-        // (7) corrected: I (w^{n+1} - w^n) + gamma dt w^n = dt^2 M.
+        // (7) corrected: I (w^{n+1} - w^n) + gamma dt w^n = dt^2 M; a swing, so without a component
+        // along n (twisting a segment about itself does not move it).
         Vec3 w = rate_[i] * (1.0 - gamma * dt * inv_i) + (dt * dt * inv_i) * M;
+        w -= w.dot(n) * n;
         const double step_angle = w.norm();
         if (step_angle > params_.max_angle_step) w *= params_.max_angle_step / step_angle;
         Vec3 next = rotateByVector(w, n).normalized();
+        const Vec3 free_next = next;
         // Bend limit relative to the rest direction keeps the hinge away from a fold-back (the angle
         // is only needed when the cosine says it may be over the limit).
         if (rest.dot(next) < cos_max_bend) {
@@ -713,14 +722,14 @@ void Simulator::step(const StepInputs& in) {
             next = rotateByVector(bend * (params_.max_bend / bend_angle), rest);
         }
         if (!bodies_now.empty() || partner_start_[i + 1] > partner_start_[i]) {
-          next = resolveCollisions(static_cast<int>(i), pivot, d, next, positions_[i], bodies_now,
-                                   bodies_before);
+          next = resolveCollisions(static_cast<int>(i), pivot, d, next, bodies_now, bodies_before);
           const Vec3 end = pivot + d * next;
-          for (const Ellipsoid& e : bodies_now)
-            if (e.contains(end))
-              max_penetration = std::max(max_penetration, -e.closestPoint(end).signed_distance);
+          for (std::size_t b : near_)
+            if (bodies_now[b].contains(end))
+              max_penetration = std::max(max_penetration, -bodies_now[b].closestPoint(end).signed_distance);
         }
-        w = rotationVectorBetween(n, next);
+        // The rotation of this substep: w itself unless a limit or a constraint moved the end.
+        if (next != free_next) w = rotationVectorBetween(n, next);
         max_rate = std::max(max_rate, w.norm() / dt);
         rate_[i] = w;
         direction_[i] = next;

@@ -123,8 +123,13 @@ class Simulator {
   template <typename ValidFor, typename ValidAll>
   Vec3 escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const ValidFor& valid_for,
                     const ValidAll& valid_all, const std::vector<Ellipsoid>& now) const;
-  /// Turns the segment pivot -> pivot + d * dir out of the bodies; returns the corrected direction.
-  Vec3 resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir, const Vec3& previous_end,
+  /// Maps the pivot and the previous end of a segment into the sphere space of every body and keeps
+  /// the bodies within its reach (near_); resolveCollisions and the reaction constraint use them.
+  void prepareBodies(const Vec3& pivot, double d, const Vec3& previous_end, const std::vector<Ellipsoid>& now,
+                     const std::vector<Ellipsoid>& before);
+  /// Turns the segment pivot -> pivot + d * dir out of the bodies (prepareBodies first); returns the
+  /// corrected direction.
+  Vec3 resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
                          const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
   /// Is some within-strip pair of the strip outside the band [proximity, far] x rest length?
   bool stripOutsideBand(std::size_t strip) const;
