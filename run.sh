@@ -11,8 +11,11 @@ export ROS_HOME=$ROOT/build/ros_home ROS_LOG_DIR=$ROOT/build/ros_home/log
 
 PACKAGES="build-essential cmake catkin ros-core-dev rosbash python3-rostest librostest-dev libgtest-dev
   libeigen3-dev libyaml-cpp-dev libtf2-ros-dev libtf2-eigen-dev libvisualization-msgs-dev
-  libgeometry-msgs-dev libstd-srvs-dev libtf2-msgs-dev librosbag-storage-dev python3-geometry-msgs python3-visualization-msgs python3-std-srvs
-  libbenchmark-dev rviz xvfb imagemagick python3-tf2-ros python3-yaml python3-rosbag"
+  libgeometry-msgs-dev libstd-srvs-dev libtf2-msgs-dev librosbag-storage-dev python3-geometry-msgs
+  python3-visualization-msgs python3-std-srvs libbenchmark-dev rviz xvfb imagemagick python3-tf2-ros python3-yaml
+  python3-rosbag libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libdiagnostic-updater-dev
+  python3-diagnostic-msgs libnodeletlib-dev libnodeletlib-tools python3-nodelet pluginlib-dev catkin-lint
+  python3-pil python3-numpy"
 
 install_deps() {
   local missing=()

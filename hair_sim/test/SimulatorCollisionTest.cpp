@@ -63,6 +63,7 @@ TEST(SimulatorCollisionTest, FastPointIsStoppedOnTheNearSideOfAThinBody) {
       EXPECT_FALSE(inflated.contains(x[k])) << "point " << k << " at step " << i;
     }
     EXPECT_EQ(sim.maxPenetration(), 0.0);
+    EXPECT_EQ(sim.penetrationCount(), 0);
   }
 }
 
@@ -78,6 +79,7 @@ TEST(SimulatorCollisionTest, ReactionConstraintHoldsHairOnABodyWithoutPenetratio
   for (int i = 0; i < 240 * 3; ++i) {
     sim.step(in);
     ASSERT_EQ(sim.maxPenetration(), 0.0) << "step " << i;
+    ASSERT_EQ(sim.penetrationCount(), 0) << "step " << i;
   }
   // The hair drapes: some point lies on the inflated surface (within 1 mm), none inside.
   const Ellipsoid inflated = ball.shape.inflated(style.strips[0].thickness_margin);

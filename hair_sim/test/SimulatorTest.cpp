@@ -264,6 +264,107 @@ TEST(SimulatorTest, RejectsBadParametersAndShapes) {
   EXPECT_NE(test::errorOf([&] { sim.setShape(std::vector<Vec3>(3)); }).find("3 points"), std::string::npos);
 }
 
+TEST(SimulatorTest, SetParametersBetweenSubstepsReachesTheNewWindEquilibrium) {
+  // tan(theta) = f / (rho g) with f = air_drag * v_air: doubling air_drag mid-run moves the strip from
+  // the first equilibrium angle to the second one, state carried over (no reset).
+  PhysicsParameters p = bare();
+  p.air_drag = 0.01;
+  p.hinge_damping = 2e-6;
+  const double wind = 3.0;
+  Simulator sim(test::hangingStrip(2, 5, 0.05, 0.0), p);
+  StepInputs in;
+  in.wind = Vec3(0.0, wind, 0.0);
+  auto meanAngle = [&] {
+    const std::vector<Vec3>& x = sim.positionsHead();
+    double sum = 0.0;
+    for (std::size_t i = 2; i < x.size(); ++i)
+      sum += std::atan2((x[i] - x[i - 2]).y(), -(x[i] - x[i - 2]).z());
+    return sum / static_cast<double>(x.size() - 2);
+  };
+  for (int i = 0; i < 240 * 20; ++i) sim.step(in);
+  EXPECT_NEAR(meanAngle(), std::atan(0.01 * wind / (p.linear_density * 9.81)), 0.1 * kPi / 180.0);
+  const long steps = sim.stepCount();
+  p.air_drag = 0.02;
+  sim.setParameters(p);
+  EXPECT_EQ(sim.stepCount(), steps);  // state kept
+  EXPECT_EQ(sim.parameters().air_drag, 0.02);
+  for (int i = 0; i < 240 * 20; ++i) sim.step(in);
+  EXPECT_NEAR(meanAngle(), std::atan(0.02 * wind / (p.linear_density * 9.81)), 0.1 * kPi / 180.0);
+}
+
+TEST(SimulatorTest, SetParametersWithTheSameValuesChangesNothing) {
+  auto run = [](bool swap) {
+    Simulator sim = defaultSimulator();
+    HeadMotionEstimator head;
+    head.reset(Iso3::Identity());
+    for (int i = 1; i <= 240; ++i) {
+      if (swap && i % 7 == 0) sim.setParameters(PhysicsParameters(sim.parameters()));
+      Iso3 pose = Iso3::Identity();
+      pose.linear() = rotationFromRpy(Vec3(0.0, 0.0, 0.8 * std::sin(i * 0.03)));
+      StepInputs in;
+      in.head = head.update(pose, sim.parameters().substep);
+      sim.step(in);
+    }
+    return sim.positionsHead();
+  };
+  const std::vector<Vec3> a = run(false), b = run(true);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)));
+}
+
+TEST(SimulatorTest, SetParametersStiffnessChangesTheHingeFrequency) {
+  // Undamped hinge: omega = sqrt(k / I). Quadrupling k between two substeps doubles it.
+  const double d = 0.05, rho = 0.01;
+  const double I = rho * d * d * d / 3.0;
+  PhysicsParameters p = bare();
+  p.gravity.setZero();
+  p.hinge_stiffness = 1e-4;
+  Simulator sim(test::hangingStrip(2, 4, d, 0.0), p);
+  const std::vector<Vec3> rest = sim.positionsHead();
+  auto measuredOmega = [&] {
+    // Displace the whole chain by 0.1 rad about +x, then time the upward zero crossings.
+    std::vector<Vec3> shape = rest;
+    const Mat3 turn = Eigen::AngleAxisd(0.1, Vec3::UnitX()).toRotationMatrix();
+    for (std::size_t i = 2; i < shape.size(); ++i) shape[i] = shape[i % 2] + turn * (shape[i] - shape[i % 2]);
+    sim.setShape(shape);
+    std::vector<double> angle;
+    StepInputs in;
+    for (int i = 0; i < 240 * 2; ++i) {
+      sim.step(in);
+      angle.push_back(firstAngle(sim));
+    }
+    const std::vector<double> up = upCrossings(angle, p.substep);
+    if (up.size() < 3) return 0.0;
+    return 2 * kPi * (up.size() - 1) / (up.back() - up.front());
+  };
+  EXPECT_NEAR(measuredOmega(), std::sqrt(1e-4 / I), 0.02 * std::sqrt(1e-4 / I));
+  p.hinge_stiffness = 4e-4;
+  sim.setParameters(p);
+  EXPECT_NEAR(measuredOmega(), std::sqrt(4e-4 / I), 0.02 * std::sqrt(4e-4 / I));
+}
+
+TEST(SimulatorTest, SetParametersRejectsBadSetsAndKeepsTheOldOne) {
+  Simulator sim = defaultSimulator();
+  const std::size_t springs = sim.springs().size();
+  PhysicsParameters p = sim.parameters();
+  p.spring_far_factor = 0.5;
+  EXPECT_NE(test::errorOf([&] { sim.setParameters(p); }).find("spring_far_factor"), std::string::npos);
+  EXPECT_EQ(sim.parameters().spring_far_factor, 1.5);
+  p = sim.parameters();
+  p.substep = 1.0 / 120.0;
+  EXPECT_NE(test::errorOf([&] { sim.setParameters(p); }).find("substep"), std::string::npos);
+  EXPECT_EQ(sim.parameters().substep, 1.0 / 240.0);
+  // Pairing keys rebuild the springs.
+  p = sim.parameters();
+  p.springs_between_strips = false;
+  sim.setParameters(p);
+  EXPECT_LT(sim.springs().size(), springs);
+  for (const SpringPair& pair : sim.springs()) EXPECT_TRUE(pair.within_strip);
+  p.springs_between_strips = true;
+  sim.setParameters(p);
+  EXPECT_EQ(sim.springs().size(), springs);
+}
+
 TEST(SimulatorTest, InertiaFloorOnlyBitesForUnstableCombinations) {
   const double dt = 1.0 / 240.0;
   // The tests above use physical inertia: the floor is far below it.

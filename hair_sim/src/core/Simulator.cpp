@@ -90,8 +90,6 @@ void Simulator::buildChains() {
     if (m == margins_.size()) margins_.push_back(s.thickness_margin);
     margin_of_strip_.push_back(static_cast<int>(m));
   }
-  const double dt = params_.substep;
-  const double k = params_.hinge_stiffness;
   int offset = 0;
   for (const Strip& s : hairstyle_.strips) {
     strip_offset_.push_back(offset);
@@ -104,6 +102,22 @@ void Simulator::buildChains() {
         const double d = seg.norm();
         length_[i] = d;
         styled_dir_[i] = seg / d;
+      }
+    }
+    offset += s.pointCount();
+  }
+  updateSegmentConstants();
+}
+
+void Simulator::updateSegmentConstants() {
+  const double dt = params_.substep;
+  const double k = params_.hinge_stiffness;
+  int offset = 0;
+  for (const Strip& s : hairstyle_.strips) {
+    for (int r = 1; r < s.rows; ++r) {
+      for (int c = 0; c < s.columns; ++c) {
+        const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
+        const double d = length_[i];
         const double inertia = params_.linear_density * d * d * d / 3.0;
         // Linear springs at the lever d/2: the collision constraint and up to the springs of this point.
         const int pairs = (params_.springs_within_strips ? 2 : 0) +
@@ -125,6 +139,21 @@ void Simulator::buildChains() {
     }
     offset += s.pointCount();
   }
+}
+
+void Simulator::setParameters(const PhysicsParameters& parameters) {
+  parameters.validate();
+  if (parameters.substep != params_.substep)
+    throw std::invalid_argument("Simulator::setParameters(...) : substep " +
+                                std::to_string(parameters.substep) + " differs from the running " +
+                                std::to_string(params_.substep) + " s: build a new Simulator to change it");
+  const bool pairing_changed = parameters.springs_within_strips != params_.springs_within_strips ||
+                               parameters.springs_between_strips != params_.springs_between_strips ||
+                               parameters.spring_radius != params_.spring_radius ||
+                               parameters.spring_max_pairs != params_.spring_max_pairs;
+  params_ = parameters;
+  updateSegmentConstants();
+  if (pairing_changed) buildSprings();
 }
 
 void Simulator::reset() {
@@ -153,6 +182,7 @@ void Simulator::reset() {
   max_rate_ = 0.0;
   have_bodies_before_ = false;
   max_penetration_ = 0.0;
+  penetrations_ = 0;
   collisions_ = 0;
 }
 
@@ -650,6 +680,7 @@ void Simulator::step(const StepInputs& in) {
   const double k_c = params_.collision_stiffness, c_c = params_.collision_damping;
   collisions_ = 0;
   double max_penetration = 0.0;
+  int penetrations = 0;
   if (!bodies_.empty()) {
     bodies_now_.resize(margins_.size());
     for (std::size_t m = 0; m < margins_.size(); ++m)
@@ -724,9 +755,13 @@ void Simulator::step(const StepInputs& in) {
         if (!bodies_now.empty() || partner_start_[i + 1] > partner_start_[i]) {
           next = resolveCollisions(static_cast<int>(i), pivot, d, next, bodies_now, bodies_before);
           const Vec3 end = pivot + d * next;
+          bool inside = false;
           for (std::size_t b : near_)
-            if (bodies_now[b].contains(end))
+            if (bodies_now[b].contains(end)) {
               max_penetration = std::max(max_penetration, -bodies_now[b].closestPoint(end).signed_distance);
+              inside = true;
+            }
+          if (inside) ++penetrations;
         }
         // The rotation of this substep: w itself unless a limit or a constraint moved the end.
         if (next != free_next) w = rotationVectorBetween(n, next);
@@ -756,6 +791,7 @@ void Simulator::step(const StepInputs& in) {
   }
   max_rate_ = max_rate;
   max_penetration_ = max_penetration;
+  penetrations_ = penetrations;
   if (!bodies_.empty()) {
     bodies_before_ = bodies_now_;
     have_bodies_before_ = true;

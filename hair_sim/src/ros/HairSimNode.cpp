@@ -3,6 +3,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <tf2_eigen/tf2_eigen.h>
 
+#include <boost/make_shared.hpp>
 #include <cmath>
 #include <stdexcept>
 
@@ -23,6 +24,17 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : nh_(nh), pnh_(private_nh), tf_listener_(tf_buffer_) {
   readParameters();
   rebuild(loadHairstyle(config_.hairstyle_file));
+  // Before any subscription: in a nodelet manager callbacks may start as soon as they exist.
+  diagnostics_ = std::make_unique<HairSimDiagnostics>(
+      nh_, pnh_, pnh_.getNamespace(), "hair_sim " + config_.head_frame, config_.physics.substep);
+  LiveSettings live;
+  live.physics = config_.physics;
+  live.wind_scale = wind_scale_;
+  live.render_mode = render_mode_ == RenderMode::Mesh      ? "mesh"
+                     : render_mode_ == RenderMode::Strands ? "strands"
+                                                           : "both";
+  live.mesh = mesh_options_;
+  live_ = std::make_unique<LiveParameters>(pnh_, live);
   markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("hair_markers", 2);
   bodies_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("collision_bodies", 1, true);
   state_pub_ = nh_.advertise<hair_sim_msgs::HairState>("hair_state", 2);
@@ -45,6 +57,7 @@ void HairSimNode::readParameters() {
   if (!pnh_.getParam("config_file", config_file_) || config_file_.empty())
     throw badParam("config_file", config_file_, "is required: the path of config/hair_sim.yaml");
   config_ = loadSimConfig(config_file_);  // names file, key, line and value on error
+  const std::string file_world_frame = config_.world_frame, file_head_frame = config_.head_frame;
   // Individual parameters override the file (launch file arguments).
   std::string frame;
   if (pnh_.getParam("world_frame", frame)) {
@@ -57,6 +70,13 @@ void HairSimNode::readParameters() {
   }
   if (config_.world_frame == config_.head_frame)
     throw badParam("head_frame", config_.head_frame, "must differ from world_frame");
+  // Bodies fixed in the file's world or head frame follow the overrides: one file serves several avatars.
+  for (Body& body : config_.bodies) {
+    if (body.frame == file_world_frame)
+      body.frame = config_.world_frame;
+    else if (body.frame == file_head_frame)
+      body.frame = config_.head_frame;
+  }
   double rate = 0.0;
   if (pnh_.getParam("publish_rate", rate)) {
     if (!(std::isfinite(rate) && rate > 0.0 && rate <= 1.0 / config_.physics.substep))
@@ -94,6 +114,9 @@ void HairSimNode::readParameters() {
   pnh_.getParam("strands_per_strip", strands_per_strip_);
   if (strands_per_strip_ < 1)
     throw badParam("strands_per_strip", std::to_string(strands_per_strip_), "must be >= 1");
+  pnh_.getParam("wind_scale", wind_scale_);
+  if (!(std::isfinite(wind_scale_) && wind_scale_ >= 0.0 && wind_scale_ <= 100.0))
+    throw badParam("wind_scale", formatDouble(wind_scale_), "must be in [0, 100]");
 }
 
 void HairSimNode::rebuild(Hairstyle hairstyle) {
@@ -143,16 +166,19 @@ void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
   if (!v.allFinite() || !std::isfinite(msg->turbulence) || !std::isfinite(msg->ramp_time)) {
     ROS_WARN_THROTTLE(2.0,
                       "hair_sim: ignored a Wind message with a non-finite velocity, turbulence or ramp_time");
+    diagnostics_->droppedInput("wind: non-finite value");
     return;
   }
   if (msg->turbulence < 0.0 || msg->ramp_time < 0.0) {
     ROS_WARN_THROTTLE(2.0,
                       "hair_sim: ignored a Wind message: turbulence %.3f and ramp_time %.3f must be >= 0",
                       msg->turbulence, msg->ramp_time);
+    diagnostics_->droppedInput("wind: negative turbulence or ramp_time");
     return;
   }
   if (v.norm() > 1000.0) {
     ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a Wind message: speed %.1f m/s is above 1000 m/s", v.norm());
+    diagnostics_->droppedInput("wind: speed above 1000 m/s");
     return;
   }
   Vec3 world = v;
@@ -162,6 +188,7 @@ void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
     if (!lookupPose(frame, ros::Time(0), pose)) {
       ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a Wind message in frame '%s': no tf to '%s'", frame.c_str(),
                         config_.world_frame.c_str());
+      diagnostics_->droppedInput("wind: no tf from '" + frame + "'");
       return;
     }
     world = pose.linear() * v;
@@ -275,7 +302,12 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
   const double dt = config_.physics.substep;
   Iso3 latest_pose;
   ros::Time target;
-  if (!lookupPose(config_.head_frame, ros::Time(0), latest_pose, &target)) return;
+  applyLiveSettings();
+  if (!lookupPose(config_.head_frame, ros::Time(0), latest_pose, &target)) {
+    diagnostics_->headPoseMissing();
+    return;
+  }
+  diagnostics_->headPose(target);
   if (!started_ || target + ros::Duration(1e-9) < sim_time_) {
     if (started_)
       ROS_WARN("hair_sim: time went backwards (%.3f -> %.3f): starting again from the rest shape",
@@ -301,11 +333,14 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
       ROS_WARN_THROTTLE(5.0,
                         "hair_sim: %.3f s behind the head pose; skipping ahead (max_substeps_per_update %d)",
                         (target - sim_time_).toSec(), max_substeps_per_update_);
+      diagnostics_->droppedInput("head poses: skipped " + formatDouble((target - sim_time_).toSec()) +
+                                 " s (max_substeps_per_update)");
       Iso3 pose;
       if (lookupPose(config_.head_frame, target, pose)) head_.reset(pose);
       sim_time_ = target;
       break;
     }
+    applyLiveSettings();
     const ros::Time t = sim_time_ + ros::Duration(dt);
     Iso3 pose;
     if (!lookupPose(config_.head_frame, t, pose)) break;
@@ -316,11 +351,12 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
     StepInputs in;
     in.head = head_.update(pose, dt);
     const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
-    in.wind = windAt(t.toSec()) + events.wind;
+    in.wind = wind_scale_ * (windAt(t.toSec()) + events.wind);
     in.turbulence = &events.turbulence;
     in.gravity = &events.gravity;
     in.body_frames = frames;
     simulator_->step(in);
+    diagnostics_->penetrations(simulator_->penetrationCount(), simulator_->maxPenetration());
     sim_time_ = t;
     last_body_frames_ = frames;
     ++steps;
@@ -328,6 +364,7 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
   events_.dropEndedBefore(sim_time_.toSec());
   status_steps_ += steps;
   status_step_seconds_ += (ros::WallTime::now() - wall_start).toSec();
+  diagnostics_->addSubsteps(steps, (ros::WallTime::now() - wall_start).toSec());
   if (last_body_frames_.size() != config_.bodies.size()) {
     for (std::size_t b = 0; b < config_.bodies.size(); ++b)
       if (!lookupPose(config_.bodies[b].frame, sim_time_, frames[b])) return;
@@ -352,16 +389,17 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
 void HairSimNode::publishOutputs(const ros::Time& stamp) {
   const Iso3& pose = head_.state().pose;
   simulator_->positionsWorld(pose, world_points_);
-  if (state_pub_.getNumSubscribers() > 0)
-    state_pub_.publish(makeHairState(*simulator_, world_points_, config_.world_frame, stamp));
+  if (state_pub_.getNumSubscribers() > 0)  // shared pointers: zero-copy in a nodelet
+    state_pub_.publish(
+        boost::make_shared<hair_sim_msgs::HairState>(makeHairState(*simulator_, world_points_, config_.world_frame, stamp)));
   if (markers_pub_.getNumSubscribers() == 0) return;
   std::vector<Ellipsoid> bodies;
   for (std::size_t b = 0; b < config_.bodies.size() && b < last_body_frames_.size(); ++b)
     bodies.push_back(config_.bodies[b].shape.transformed(last_body_frames_[b]));
   meshes_->build(world_points_, simulator_->stripOffsets(), simulator_->hairstyle().scalp.transformed(pose),
                  bodies);
-  markers_pub_.publish(
-      makeHairMarkers(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp));
+  markers_pub_.publish(boost::make_shared<visualization_msgs::MarkerArray>(
+      makeHairMarkers(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp)));
 }
 
 void HairSimNode::publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames) {
@@ -373,6 +411,28 @@ void HairSimNode::publishBodies(const ros::Time& stamp, const std::vector<Iso3>&
   published_body_frames_ = frames;
   bodies_pub_.publish(
       makeBodyMarkers(config_.bodies, frames, config_.head_frame, config_.world_frame, stamp));
+}
+
+void HairSimNode::applyLiveSettings() {
+  LiveSettings s;
+  if (!live_ || !live_->takePending(s)) return;
+  try {
+    simulator_->setParameters(s.physics);  // between two substeps: the state is kept
+  } catch (const std::invalid_argument& e) {
+    ROS_WARN("hair_sim: live parameters not applied: %s", e.what());
+    return;
+  }
+  config_.physics = s.physics;  // a later reset KEEP_SHAPE rebuilds with them
+  wind_scale_ = s.wind_scale;
+  render_mode_ = s.render_mode == "strands" ? RenderMode::Strands
+                 : s.render_mode == "both"  ? RenderMode::Both
+                                            : RenderMode::Mesh;
+  if (s.mesh.level_of_detail.samples_across != mesh_options_.level_of_detail.samples_across ||
+      s.mesh.level_of_detail.samples_along != mesh_options_.level_of_detail.samples_along ||
+      s.mesh.max_triangles != mesh_options_.max_triangles) {
+    mesh_options_ = s.mesh;
+    meshes_ = std::make_unique<HairMeshBuilder>(simulator_->hairstyle(), mesh_options_);
+  }
 }
 
 }  // namespace hair_sim

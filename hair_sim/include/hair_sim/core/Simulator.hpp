@@ -78,6 +78,12 @@ class Simulator {
   void setShape(const std::vector<Vec3>& positions_head);
   /// One substep of parameters().substep seconds with the given inputs at its end time.
   void step(const StepInputs& inputs);
+  /// Swaps the physical parameters between two substeps, keeping the state (shape and rates): the
+  /// next step() runs with them. Inertia floors and compensated rest directions are recomputed, and
+  /// the spring pairs too when their pairing keys (within/between, radius, max_pairs) changed.
+  /// Throws std::invalid_argument (and keeps the old parameters) on an invalid set or on a different
+  /// substep, which needs a new Simulator.
+  void setParameters(const PhysicsParameters& parameters);
 
   const Hairstyle& hairstyle() const { return hairstyle_; }
   const PhysicsParameters& parameters() const { return params_; }
@@ -104,6 +110,9 @@ class Simulator {
   double minSpringRatio(bool within_strip) const { return min_ratio_[within_strip ? 1 : 0]; }
   /// Largest distance / rest length over the springs of the given kind, measured as minStripGap().
   double maxSpringRatio(bool within_strip) const { return max_ratio_[within_strip ? 1 : 0]; }
+  /// Control points (below the roots) inside an inflated body after the last substep (0 by construction
+  /// unless a body is too thin or too fast for the escape search).
+  int penetrationCount() const { return penetrations_; }
   /// Segments turned out of a body in the last substep.
   int collisionCount() const { return collisions_; }
   /// The bodies in the head frame, inflated by `margin`, for a head pose and body frame poses.
@@ -117,6 +126,8 @@ class Simulator {
 
  private:
   void buildChains();
+  /// Inertia floors (1 / I) and compensated rest directions from the lengths, styled directions and params_.
+  void updateSegmentConstants();
   void buildSprings();
   void computeSpringForces();
   /// The valid direction nearest to dir (bisection toward an escape direction) for the bodies.
@@ -176,6 +187,7 @@ class Simulator {
   std::vector<std::vector<Ellipsoid>> bodies_before_;
   bool have_bodies_before_ = false;
   double max_penetration_ = 0.0;
+  int penetrations_ = 0;
   double min_gap_ = 0.0;
   double min_ratio_[2] = {1.0, 1.0};
   double max_ratio_[2] = {1.0, 1.0};

@@ -18,6 +18,8 @@
 #include "hair_sim/core/geometry/HairMeshBuilder.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
 #include "hair_sim/ros/HairMessages.hpp"
+#include "hair_sim/ros/HairSimDiagnostics.hpp"
+#include "hair_sim/ros/LiveParameters.hpp"
 
 namespace hair_sim {
 
@@ -45,6 +47,8 @@ class HairSimNode {
   Vec3 windAt(double t) const;
   void publishOutputs(const ros::Time& stamp);
   void publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames);
+  /// Takes the live settings (dynamic_reconfigure) changed since the last call, between two substeps.
+  void applyLiveSettings();
 
   ros::NodeHandle nh_, pnh_;
   tf2_ros::Buffer tf_buffer_;
@@ -84,6 +88,11 @@ class HairSimNode {
   long status_steps_ = 0;
   double status_step_seconds_ = 0.0;
   long status_publishes_ = 0;
+
+  // Live tuning and /diagnostics (LiveParameters.hpp, HairSimDiagnostics.hpp).
+  double wind_scale_ = 1.0;
+  std::unique_ptr<HairSimDiagnostics> diagnostics_;
+  std::unique_ptr<LiveParameters> live_;
 };
 
 }  // namespace hair_sim

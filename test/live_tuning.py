@@ -1,0 +1,167 @@
+#!/usr/bin/python3
+"""rostest node for live_tuning.test: dynamic_reconfigure on a running hair_sim_node.
+
+  test_live_parameters
+      0. Waits for hair_state and sends a steady wind of 3 m/s along +x (Wind, ramp 0).
+      1. render_mode strands: within 2 s hair_markers carries a LINE_LIST in ns 'strands' and no 'hair'
+         mesh; render_mode mesh: the TRIANGLE_LIST is back.
+      2. render_mode bogus: rejected, the server answers with the previous value (mesh) and the
+         markers stay a mesh.
+      3. samples_across 1, samples_along 2: the mesh has fewer points (both faces of
+         2 (n_u - 1)(n_v - 1) triangles per strip); back to 2 x 4: the first count again.
+      4. The wind bends the hair: mean tip x displacement from the windless start d_wind > 5 mm.
+         wind_scale 0: the tips come back (|d| < d_wind / 4) within 6 s; wind_scale 1: bent again.
+      5. hinge_stiffness x 10: the steady displacement drops below d_wind / 2 (a stiffer hinge bends less).
+      Throughout, HairState.step only grows: a change never resets the simulation.
+
+Private parameters: node (default /hair_sim).
+"""
+import sys
+import threading
+import time
+import unittest
+
+import dynamic_reconfigure.client
+import rospy
+import rostest
+from hair_sim_msgs.msg import HairState, Wind
+from visualization_msgs.msg import Marker, MarkerArray
+
+PKG = 'hair_sim'
+NAME = 'live_tuning'
+WIND = 3.0  # m/s along +x
+
+
+class LiveTuning(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node(NAME)
+
+    def setUp(self):
+        self.lock = threading.Lock()
+        self.state = None
+        self.markers = None
+        self.steps = []
+        rospy.Subscriber('hair_state', HairState, self.on_state, queue_size=2)
+        rospy.Subscriber('hair_markers', MarkerArray, self.on_markers, queue_size=1, buff_size=1 << 24)
+        self.wind_pub = rospy.Publisher('wind', Wind, queue_size=1, latch=True)
+
+    def on_state(self, msg):
+        with self.lock:
+            self.state = msg
+            self.steps.append(msg.step)
+
+    def on_markers(self, msg):
+        with self.lock:
+            self.markers = (rospy.get_time(), msg)
+
+    def tips(self):
+        with self.lock:
+            state = self.state
+        tips = []
+        for s in state.strips:
+            for c in range(s.columns):
+                tips.append(s.points[(s.rows - 1) * s.columns + c])
+        return tips
+
+    def mean_dx(self, rest):
+        tips = self.tips()
+        return sum(t.x - r.x for t, r in zip(tips, rest)) / len(rest)
+
+    def wait_for(self, predicate, timeout, what):
+        deadline = time.time() + timeout
+        while not predicate():
+            self.assertLess(time.time(), deadline, 'timed out after %.0f s waiting for %s' % (timeout, what))
+            time.sleep(0.05)
+
+    def wait_markers(self, predicate, what, timeout=3.0):
+        """The first hair_markers (as {ns: marker}) that satisfies predicate within timeout."""
+        deadline = time.time() + timeout
+        while True:
+            with self.lock:
+                ns = {m.ns: m for m in self.markers[1].markers} if self.markers else {}
+            if ns and predicate(ns):
+                return ns
+            self.assertLess(time.time(), deadline, 'within %.0f s no hair_markers with %s; last: %s'
+                            % (timeout, what, {k: len(m.points) for k, m in ns.items()}))
+            time.sleep(0.05)
+
+    def settle(self, rest, seconds):
+        """Mean tip displacement once it has stopped changing (max `seconds`)."""
+        last = self.mean_dx(rest)
+        end = time.time() + seconds
+        while time.time() < end:
+            time.sleep(0.5)
+            now = self.mean_dx(rest)
+            if abs(now - last) < 2e-4:
+                return now
+            last = now
+        return last
+
+    def reconfigure(self, **values):
+        answer = self.client.update_configuration(values)
+        time.sleep(0.3)  # the node takes them before its next substep (next timer tick)
+        return answer
+
+    def test_live_parameters(self):
+        self.wait_for(lambda: self.state is not None, 30.0, 'hair_state')
+        self.client = dynamic_reconfigure.client.Client(rospy.get_param('~node', '/hair_sim'), timeout=10.0)
+        rest = self.tips()
+
+        # 1. Render mode.
+        self.reconfigure(render_mode='strands')
+        ns = self.wait_markers(lambda ns: 'strands' in ns and 'hair' not in ns, 'strands only')
+        self.assertEqual(ns['strands'].type, Marker.LINE_LIST)
+        self.reconfigure(render_mode='mesh')
+        ns = self.wait_markers(lambda ns: 'hair' in ns and 'strands' not in ns, 'the mesh only')
+        self.assertEqual(ns['hair'].type, Marker.TRIANGLE_LIST)
+        mesh_points = len(ns['hair'].points)
+
+        # 2. A bad value is refused and the previous one kept.
+        answer = self.reconfigure(render_mode='bogus')
+        self.assertEqual(answer['render_mode'], 'mesh')
+        self.assertEqual(self.client.get_configuration(timeout=5.0)['render_mode'], 'mesh')
+        time.sleep(0.5)
+        self.wait_markers(lambda ns: 'hair' in ns and 'strands' not in ns, 'the mesh only')
+
+        # 3. Level of detail.
+        self.reconfigure(samples_across=1, samples_along=2)
+        ns = self.wait_markers(lambda ns: 0 < len(ns.get('hair', Marker()).points) < mesh_points / 2,
+                               'fewer than half the %d mesh points' % mesh_points)
+        rospy.loginfo('%s: level of detail 2 x 4: %d points, 1 x 2: %d points', NAME, mesh_points,
+                      len(ns['hair'].points))
+        self.reconfigure(samples_across=2, samples_along=4)
+        self.wait_markers(lambda ns: len(ns.get('hair', Marker()).points) == mesh_points,
+                          'the %d points of 2 x 4 again' % mesh_points)
+
+        # 4. Wind scale.
+        wind = Wind()
+        wind.header.stamp = rospy.Time.now()
+        wind.velocity.x = WIND
+        self.wind_pub.publish(wind)
+        d_wind = self.settle(rest, 10.0)
+        rospy.loginfo('%s: wind %.1f m/s: mean tip displacement %.4f m', NAME, WIND, d_wind)
+        self.assertGreater(d_wind, 0.005)
+        self.reconfigure(wind_scale=0.0)
+        d_off = self.settle(rest, 8.0)
+        rospy.loginfo('%s: wind_scale 0: %.4f m', NAME, d_off)
+        self.assertLess(abs(d_off), d_wind / 4)
+        self.reconfigure(wind_scale=1.0)
+        d_on = self.settle(rest, 8.0)
+        rospy.loginfo('%s: wind_scale 1: %.4f m', NAME, d_on)
+        self.assertGreater(d_on, 0.75 * d_wind)
+
+        # 5. Stiffness.
+        k = self.client.get_configuration(timeout=5.0)['hinge_stiffness']
+        self.reconfigure(hinge_stiffness=10 * k)
+        d_stiff = self.settle(rest, 8.0)
+        rospy.loginfo('%s: hinge_stiffness %.2g -> %.2g: %.4f m', NAME, k, 10 * k, d_stiff)
+        self.assertLess(d_stiff, d_wind / 2)
+
+        with self.lock:
+            steps = list(self.steps)
+        self.assertTrue(all(b >= a for a, b in zip(steps, steps[1:])), 'the step count went back: a reset')
+
+
+if __name__ == '__main__':
+    rostest.rosrun(PKG, NAME, LiveTuning, sys.argv)
