@@ -59,7 +59,7 @@ case "$cmd" in
     mkdir -p build/demo
     build/devel/lib/hair_sim/hair_sim_offline --config config/hair_sim.yaml \
       --scenario config/scenarios/head_shake.yaml --out build/demo/control_points.csv \
-      --poses-out build/demo/head_poses.csv --mesh-out build/demo/meshes
+      --poses-out build/demo/head_poses.csv --mesh-out build/demo/meshes --bag build/demo/hair_sim.bag
     ;;
   bench)
     install_deps
