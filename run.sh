@@ -13,6 +13,9 @@ PACKAGES="build-essential cmake catkin ros-core-dev rosbash python3-rostest libr
   libeigen3-dev libyaml-cpp-dev libtf2-ros-dev libtf2-eigen-dev libvisualization-msgs-dev
   libgeometry-msgs-dev libstd-srvs-dev python3-geometry-msgs python3-visualization-msgs python3-std-srvs
   libbenchmark-dev rviz xvfb imagemagick python3-tf2-ros python3-yaml python3-rosbag"
+# The rviz display plugin hair_sim/HairDisplay (librviz-dev brings Qt 5, OGRE 1.12 and pluginlib) and its test
+# (rviz in Python, screenshots read with PIL and numpy).
+PACKAGES="$PACKAGES librviz-dev python3-rviz python3-pil python3-numpy"
 
 install_deps() {
   local missing=()
