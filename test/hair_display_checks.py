@@ -24,8 +24,9 @@ blended over the background has blue - green >= PARTIAL_MARGIN: the background s
                             with the same config; its display properties are changed while it runs:
                             Texture off: hair still there, partial pixels fall below MAX_PARTIAL_EDGE_OFF of the
                             edge band and MAX_PARTIAL_OFF of the hair (the negative control of the alpha check:
-                            plain opaque strips have none but their multisampled outline); Alpha
-                            Threshold 0.6: fewer hair pixels than at 0.05 (faint texels dropped); Override
+                            plain opaque strips have none but their multisampled outline); Alpha Threshold 0.6:
+                            under 0.9 x the hair pixels at 0.05 (mean of the shots before and after: faint texels
+                            dropped); Override
                             Colour red: the opaque hair turns red (red / green >= 3, the brown is < 2.5);
                             Level of Detail 0, 7, 3: Current Level 1 x 1 / 4 x 8 / 2 x 4 with the triangle
                             counts of the default hairstyle; Auto Level of Detail with the reference distance
@@ -272,7 +273,9 @@ class HairDisplayChecks(unittest.TestCase):
         self.assertLessEqual(untextured['partial_edge'], MAX_PARTIAL_EDGE_OFF, summary(untextured))
         self.assertLessEqual(untextured['partial'], MAX_PARTIAL_OFF, summary(untextured))
 
-        self.assertLess(shots['threshold_0.6']['hair'], textured['hair'], summary(shots['threshold_0.6']))
+        # The hair moves meanwhile: compare with the mean of the shots just before and after.
+        around = 0.5 * (textured['hair'] + shots['override_red']['hair'])
+        self.assertLess(shots['threshold_0.6']['hair'], 0.9 * around, summary(shots['threshold_0.6']))
 
         r, g, _ = textured['mean_opaque']
         self.assertLess(r / max(g, 1.0), 2.5, summary(textured))
