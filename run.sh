@@ -16,6 +16,9 @@ PACKAGES="build-essential cmake catkin ros-core-dev rosbash python3-rostest libr
   python3-rosbag libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libdiagnostic-updater-dev
   python3-diagnostic-msgs libnodeletlib-dev libnodeletlib-tools python3-nodelet pluginlib-dev catkin-lint
   python3-pil python3-numpy"
+# The rviz display plugin hair_sim/HairDisplay (librviz-dev brings Qt 5, OGRE 1.12 and pluginlib) and its test
+# (rviz in Python, screenshots read with PIL and numpy).
+PACKAGES="$PACKAGES librviz-dev python3-rviz"
 
 install_deps() {
   local missing=()

@@ -19,7 +19,8 @@ source "$ROOT/build/devel/setup.bash"
 
 run_demo() {
   roslaunch "$ROOT/launch/demo.launch" >"$ROOT/build/demo/roslaunch.log" 2>&1 &
-  local launch=$!
+  # Global, not local: the EXIT trap runs after run_demo has returned.
+  launch=$!
   trap 'kill -INT $launch 2>/dev/null; wait $launch 2>/dev/null' EXIT
   echo "demo: roslaunch launch/demo.launch (log: build/demo/roslaunch.log)"
   local start=$SECONDS next_shot=$((SECONDS + SHOT_EVERY))

@@ -248,6 +248,30 @@ TEST(HairLookTest, StrandLinesSkipClippedTips) {
   EXPECT_NEAR(half.back().z(), -0.19, 1e-12);
 }
 
+TEST(HairLookTest, ShadeIsTheLightingOfColorizeWithoutPattern) {
+  HairLookParameters parameters;
+  parameters.view_direction = Vec3(0.3, 1.0, 0.1);
+  const HairLook look(parameters);
+  HairLookParameters plain_parameters = parameters;
+  plain_parameters.stripe_contrast = 0.0;  // no stripes: colorize's rgb is then the lighting alone
+  const HairLook plain(plain_parameters);
+  const StripMesh mesh = hangingStrip(LevelOfDetail{3, 8});
+  const Rgba base{0.3f, 0.2f, 0.1f, 0.8f};
+  std::vector<Rgba> shaded, reference;
+  look.shade(mesh, base, shaded);
+  plain.colorize(mesh, base, 7u, reference);
+  ASSERT_EQ(shaded.size(), static_cast<std::size_t>(mesh.vertexCount()));
+  for (std::size_t i = 0; i < shaded.size(); ++i) {
+    EXPECT_FLOAT_EQ(shaded[i].r, reference[i].r);
+    EXPECT_FLOAT_EQ(shaded[i].g, reference[i].g);
+    EXPECT_FLOAT_EQ(shaded[i].b, reference[i].b);
+    EXPECT_FLOAT_EQ(shaded[i].a, 0.8f);  // no tip fade: the texture carries it
+  }
+  StripMesh bad = mesh;
+  bad.tangents.pop_back();
+  expectInvalid([&] { look.shade(bad, base, shaded); }, "HairLook::shade(...) : tangents");
+}
+
 TEST(HairLookTest, BadInputsThrow) {
   HairLookParameters parameters;
   parameters.strands_per_strip = 0;

@@ -39,6 +39,7 @@ hair_sim_msgs::HairState makeHairState(const Simulator& simulator, const std::ve
     out.columns = static_cast<std::uint32_t>(strips[s].columns);
     out.rows = static_cast<std::uint32_t>(strips[s].rows);
     out.hair_length = strips[s].hair_length;
+    out.color = toColor(strips[s].color);
     out.points.reserve(static_cast<std::size_t>(strips[s].pointCount()));
     for (int p = 0; p < strips[s].pointCount(); ++p)
       out.points.push_back(toPoint(world_points[static_cast<std::size_t>(offsets[s] + p)]));

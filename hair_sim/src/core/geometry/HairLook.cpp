@@ -154,11 +154,21 @@ double HairLook::rootFactor(double v) const {
 
 void HairLook::colorize(const StripMesh& mesh, const Rgba& base, std::uint32_t strip_seed,
                         std::vector<Rgba>& colours) const {
-  checkMesh(mesh, "HairLook::colorize(...)");
+  colour(mesh, base, strip_seed, true, colours);
+}
+
+void HairLook::shade(const StripMesh& mesh, const Rgba& base, std::vector<Rgba>& colours) const {
+  colour(mesh, base, 0U, false, colours);
+}
+
+void HairLook::colour(const StripMesh& mesh, const Rgba& base, std::uint32_t strip_seed, bool pattern,
+                      std::vector<Rgba>& colours) const {
+  const char* where = pattern ? "HairLook::colorize(...)" : "HairLook::shade(...)";
+  checkMesh(mesh, where);
   const std::size_t count = mesh.positions.size();
   if (mesh.tangents.size() != count || mesh.v_param.size() != count || mesh.u_param.size() != count) {
     throw std::invalid_argument(
-        "HairLook::colorize(...) : tangents, v_param and u_param must have " + std::to_string(count) +
+        std::string(where) + " : tangents, v_param and u_param must have " + std::to_string(count) +
         " entries, got " + std::to_string(mesh.tangents.size()) + ", " + std::to_string(mesh.v_param.size()) +
         ", " + std::to_string(mesh.u_param.size()));
   }
@@ -171,7 +181,8 @@ void HairLook::colorize(const StripMesh& mesh, const Rgba& base, std::uint32_t s
   const double ambient = parameters_.ambient;
   const double footprint = 1.0 / static_cast<double>(mesh.n_u - 1);
   for (int iu = 0; iu < mesh.n_u; ++iu) {
-    const double profile = stripeProfile(mesh.u_param[static_cast<std::size_t>(iu)], strip_seed, footprint);
+    const double profile =
+        pattern ? stripeProfile(mesh.u_param[static_cast<std::size_t>(iu)], strip_seed, footprint) : 1.0;
     const double stripe_alpha = 1.0 - contrast * (1.0 - profile);
     const double stripe_brightness = 1.0 - 0.5 * contrast * (1.0 - profile);
     for (int iv = 0; iv < mesh.n_v; ++iv) {
@@ -186,7 +197,7 @@ void HairLook::colorize(const StripMesh& mesh, const Rgba& base, std::uint32_t s
       out.r = clampChannel(base_r * shade + highlight);
       out.g = clampChannel(base_g * shade + highlight);
       out.b = clampChannel(base_b * shade + highlight);
-      out.a = clampChannel(base_a * stripe_alpha * tipFade(v));
+      out.a = clampChannel(pattern ? base_a * stripe_alpha * tipFade(v) : base_a);
     }
   }
 }

@@ -50,6 +50,10 @@ class HairLook {
   /// strips. Throws std::invalid_argument when the mesh arrays are inconsistent.
   void colorize(const StripMesh& mesh, const Rgba& base, std::uint32_t strip_seed,
                 std::vector<Rgba>& colours) const;
+  /// The lighting of colorize() alone (Kajiya-Kay diffuse and specular, root darkening), no stripes and no
+  /// tip fade: alpha = base.a. The vertex colours under an alpha-mapped texture that carries the strands
+  /// and the tip fade (HairTexture), as the rviz display draws them. Same sizes and errors as colorize().
+  void shade(const StripMesh& mesh, const Rgba& base, std::vector<Rgba>& colours) const;
 
   /// Kajiya-Kay diffuse term sin(T, L) for unit T and L, in [0, 1].
   static double diffuse(const Vec3& tangent, const Vec3& light);
@@ -78,6 +82,9 @@ class HairLook {
                           std::vector<Rgba>* point_colours = nullptr);
 
  private:
+  void colour(const StripMesh& mesh, const Rgba& base, std::uint32_t strip_seed, bool pattern,
+              std::vector<Rgba>& colours) const;
+
   HairLookParameters parameters_;
   Vec3 light_;
   Vec3 view_;
