@@ -3,7 +3,7 @@
 
   cpu      share of one core used by the node's process over the window (/proc/PID/stat utime+stime)
   rate     hair_markers messages per second received
-  latency  receipt time of each hair_markers message minus its header.stamp, which is the stamp of
+  latency  receipt time of each hair_markers (and hair_state) message minus its header.stamp, which is the stamp of
            the newest head tf the markers reflect (head_driver stamps tf with the time it sends it):
            from a tf update to the markers that reflect it, transport both ways included
   bytes    serialized size of each hair_markers message
@@ -36,7 +36,12 @@ def percentile(values, p):
 def main():
     pid, seconds = int(sys.argv[1]), float(sys.argv[2])
     rospy.init_node('bench_node', anonymous=True)
-    latencies, sizes = [], []
+    latencies, sizes, state_latencies = [], [], []
+
+    def on_state(msg):
+        # HairState: Header first: uint32 seq, uint32 secs, uint32 nsecs.
+        secs, nsecs = struct.unpack_from('<II', msg._buff, 4)
+        state_latencies.append(rospy.get_rostime().to_sec() - (secs + 1e-9 * nsecs))
 
     def on_markers(msg):
         now = rospy.get_rostime().to_sec()
@@ -47,6 +52,7 @@ def main():
         sizes.append(len(raw))
 
     rospy.Subscriber('hair_markers', rospy.AnyMsg, on_markers, queue_size=100, buff_size=1 << 26)
+    rospy.Subscriber('hair_state', rospy.AnyMsg, on_state, queue_size=100, buff_size=1 << 22)
     deadline = time.time() + 30.0
     while not latencies and time.time() < deadline:
         time.sleep(0.05)
@@ -56,6 +62,7 @@ def main():
     time.sleep(2.0)  # let the subscription settle
     del latencies[:]
     del sizes[:]
+    del state_latencies[:]
     cpu0, wall0 = cpu_seconds(pid), time.time()
     time.sleep(seconds)
     cpu1, wall1 = cpu_seconds(pid), time.time()
@@ -68,6 +75,8 @@ def main():
         'latency_ms_p99': 1e3 * percentile(latencies, 99),
         'latency_ms_max': 1e3 * max(latencies),
         'bytes_per_message': sum(sizes) / n,
+        'state_latency_ms_p50': 1e3 * percentile(state_latencies, 50),
+        'state_latency_ms_p99': 1e3 * percentile(state_latencies, 99),
         'messages': n,
     }))
 

@@ -3,6 +3,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <tf2_eigen/tf2_eigen.h>
 
+#include <boost/bind/bind.hpp>
 #include <boost/make_shared.hpp>
 #include <cmath>
 #include <stdexcept>
@@ -20,8 +21,7 @@ std::invalid_argument badParam(const std::string& name, const std::string& value
 
 }  // namespace
 
-HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), pnh_(private_nh), tf_listener_(tf_buffer_) {
+HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(nh), pnh_(private_nh) {
   readParameters();
   rebuild(loadHairstyle(config_.hairstyle_file));
   // Before any subscription: in a nodelet manager callbacks may start as soon as they exist.
@@ -43,6 +43,12 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   events_sub_ = nh_.subscribe("events", 50, &HairSimNode::onEvent, this);
   reset_srv_ = nh_.advertiseService("reset", &HairSimNode::onReset, this);
   trigger_srv_ = nh_.advertiseService("trigger", &HairSimNode::onTrigger, this);
+  // tf on the node's own queue (no listener thread): a head pose triggers the step and the output.
+  tf_sub_ = nh_.subscribe<tf2_msgs::TFMessage>(
+      "/tf", 100, boost::bind(&HairSimNode::onTf, this, boost::placeholders::_1, false), ros::VoidConstPtr(),
+      ros::TransportHints().tcpNoDelay());
+  tf_static_sub_ = nh_.subscribe<tf2_msgs::TFMessage>(
+      "/tf_static", 100, boost::bind(&HairSimNode::onTf, this, boost::placeholders::_1, true));
   timer_ = nh_.createTimer(ros::Duration(1.0 / config_.publish_rate), &HairSimNode::onTimer, this);
   status_since_ = ros::WallTime::now();
   ROS_INFO(
@@ -298,7 +304,34 @@ bool HairSimNode::onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs:
   return true;
 }
 
+void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event, bool is_static) {
+  if (!is_static) {
+    const ros::Time now = ros::Time::now();
+    if (now < last_tf_receipt_) {
+      ROS_WARN("hair_sim: time jumped back %.3f s: clearing the tf buffer", (last_tf_receipt_ - now).toSec());
+      tf_buffer_.clear();
+    }
+    last_tf_receipt_ = now;
+  }
+  const std::string& authority = event.getPublisherName();
+  for (const geometry_msgs::TransformStamped& t : event.getMessage()->transforms) {
+    try {
+      tf_buffer_.setTransform(t, authority, is_static);
+    } catch (const tf2::TransformException& e) {
+      ROS_WARN_THROTTLE(5.0, "hair_sim: tf %s -> %s from %s rejected: %s", t.header.frame_id.c_str(),
+                        t.child_frame_id.c_str(), authority.c_str(), e.what());
+    }
+  }
+  if (!is_static) update(true);
+}
+
 void HairSimNode::onTimer(const ros::TimerEvent&) {
+  // A fallback while no tf comes in (the hair still settles and is published at publish_rate).
+  if ((ros::WallTime::now() - last_tf_publish_).toSec() < 1.5 / config_.publish_rate) return;
+  update(false);
+}
+
+void HairSimNode::update(bool from_tf) {
   const double dt = config_.physics.substep;
   Iso3 latest_pose;
   ros::Time target;
@@ -320,6 +353,7 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
       events_.clear();
     }
     sim_time_ = target;
+    next_publish_ = ros::Time();
     started_ = true;
     ROS_INFO("hair_sim: following %s in %s from t = %.3f", config_.head_frame.c_str(),
              config_.world_frame.c_str(), target.toSec());
@@ -365,6 +399,18 @@ void HairSimNode::onTimer(const ros::TimerEvent&) {
   status_steps_ += steps;
   status_step_seconds_ += (ros::WallTime::now() - wall_start).toSec();
   diagnostics_->addSubsteps(steps, (ros::WallTime::now() - wall_start).toSec());
+  // An output is due every 1/publish_rate s of ROS time, on the first head pose after that (so the
+  // markers go out right after the tf they reflect); the timer publishes whenever it acts.
+  const ros::Time now = ros::Time::now();
+  const ros::Duration period(1.0 / config_.publish_rate);
+  if (from_tf) {
+    if (!next_publish_.isZero() && now < next_publish_) return;
+    next_publish_ =
+        next_publish_.isZero() || now - next_publish_ > period ? now + period : next_publish_ + period;
+    last_tf_publish_ = ros::WallTime::now();
+  } else {
+    next_publish_ = now + period;
+  }
   if (last_body_frames_.size() != config_.bodies.size()) {
     for (std::size_t b = 0; b < config_.bodies.size(); ++b)
       if (!lookupPose(config_.bodies[b].frame, sim_time_, frames[b])) return;
@@ -390,8 +436,8 @@ void HairSimNode::publishOutputs(const ros::Time& stamp) {
   const Iso3& pose = head_.state().pose;
   simulator_->positionsWorld(pose, world_points_);
   if (state_pub_.getNumSubscribers() > 0)  // shared pointers: zero-copy in a nodelet
-    state_pub_.publish(
-        boost::make_shared<hair_sim_msgs::HairState>(makeHairState(*simulator_, world_points_, config_.world_frame, stamp)));
+    state_pub_.publish(boost::make_shared<hair_sim_msgs::HairState>(
+        makeHairState(*simulator_, world_points_, config_.world_frame, stamp)));
   if (markers_pub_.getNumSubscribers() == 0) return;
   std::vector<Ellipsoid> bodies;
   for (std::size_t b = 0; b < config_.bodies.size() && b < last_body_frames_.size(); ++b)

@@ -6,8 +6,8 @@
 #include <hair_sim_msgs/Trigger.h>
 #include <hair_sim_msgs/Wind.h>
 #include <ros/ros.h>
+#include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/transform_listener.h>
 
 #include <memory>
 #include <string>
@@ -33,6 +33,12 @@ class HairSimNode {
   void readParameters();
   void rebuild(Hairstyle hairstyle);
   void onTimer(const ros::TimerEvent& event);
+  /// /tf and /tf_static into the buffer (what tf2_ros::TransformListener does), then update(): the hair
+  /// steps as soon as a new head pose is in, and is published then if an output is due.
+  void onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event, bool is_static);
+  /// Steps to the newest head pose and publishes if due (from_tf) or always (the timer, which only
+  /// acts while no tf has come in for 1.5 output periods).
+  void update(bool from_tf);
   void onWind(const hair_sim_msgs::Wind::ConstPtr& msg);
   bool onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response);
   void onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg);
@@ -52,7 +58,10 @@ class HairSimNode {
 
   ros::NodeHandle nh_, pnh_;
   tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
+  ros::Subscriber tf_sub_, tf_static_sub_;
+  ros::Time last_tf_receipt_;      ///< to clear the buffer when time jumps back, as tf2_ros does
+  ros::Time next_publish_;         ///< when the next output is due (ROS time)
+  ros::WallTime last_tf_publish_;  ///< last output made on a tf arrival
   ros::Subscriber wind_sub_, events_sub_;
   ros::Publisher markers_pub_, bodies_pub_, state_pub_, events_pub_;
   ros::ServiceServer reset_srv_, trigger_srv_;
