@@ -65,6 +65,14 @@ visualization_msgs::MarkerArray makeHairMarkers(const HairMeshBuilder& meshes, R
     m.id = 0;
     m.type = visualization_msgs::Marker::TRIANGLE_LIST;
     std::vector<std::uint32_t> indices;
+    std::size_t total = 0;  // sized once: the message holds tens of thousands of vertices
+    for (const StripMesh& mesh : meshes.meshes()) {
+      indices.clear();
+      Tessellator::appendTriangles(mesh, 0, true, indices);
+      total += indices.size();
+    }
+    m.points.reserve(total);
+    m.colors.reserve(total);
     for (std::size_t s = 0; s < meshes.meshes().size(); ++s) {
       const StripMesh& mesh = meshes.meshes()[s];
       const std::vector<Rgba>& colours = meshes.colours()[s];
@@ -75,7 +83,7 @@ visualization_msgs::MarkerArray makeHairMarkers(const HairMeshBuilder& meshes, R
         m.colors.push_back(toColor(colours[k]));
       }
     }
-    array.markers.push_back(m);
+    array.markers.push_back(std::move(m));
   }
   if (mode != RenderMode::Mesh) {
     visualization_msgs::Marker m = base;
@@ -91,7 +99,7 @@ visualization_msgs::MarkerArray makeHairMarkers(const HairMeshBuilder& meshes, R
       m.points.push_back(toPoint(points[k]));
       m.colors.push_back(toColor(colours[k]));
     }
-    array.markers.push_back(m);
+    array.markers.push_back(std::move(m));
   }
   return array;
 }
