@@ -97,6 +97,9 @@ class HairSimNode {
   long status_steps_ = 0;
   double status_step_seconds_ = 0.0;
   long status_publishes_ = 0;
+  ros::WallTime tf_received_;  ///< arrival of the tf message being handled
+  double status_tf_to_output_sum_ = 0.0, status_tf_to_output_max_ = 0.0;  ///< s, outputs made on a tf
+  long status_tf_outputs_ = 0;
 
   // Live tuning and /diagnostics (LiveParameters.hpp, HairSimDiagnostics.hpp).
   double wind_scale_ = 1.0;
