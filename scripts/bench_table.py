@@ -42,6 +42,8 @@ def main():
                   '| hair_markers rate | %.1f Hz |' % node['rate_hz'],
                   '| latency tf -> markers, median / p99 / max | %.1f / %.1f / %.1f ms |' % (
                       node['latency_ms_p50'], node['latency_ms_p99'], node['latency_ms_max']),
+                  '| latency tf -> hair_state, median / p99 | %.1f / %.1f ms |' % (
+                      node['state_latency_ms_p50'], node['state_latency_ms_p99']),
                   '| bytes per hair_markers message | %s |' % format(int(node['bytes_per_message']), ',')]
     elif node:
         lines += ['', 'node: ' + node['error']]
