@@ -2,6 +2,8 @@
 /// Shared helpers and tolerances of the core tests.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
@@ -21,7 +23,8 @@ inline std::string repoPath(const std::string& relative) {
 
 /// Writes text to a fresh file under the test's temp folder and returns its path.
 inline std::string writeTemp(const std::string& name, const std::string& text) {
-  const std::string path = ::testing::TempDir() + "hair_sim_" + name;
+  // The process id in the name: CTest runs test executables in parallel, and they share TempDir().
+  const std::string path = ::testing::TempDir() + "hair_sim_" + std::to_string(::getpid()) + "_" + name;
   std::ofstream out(path);
   out << text;
   return path;
