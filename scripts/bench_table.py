@@ -45,6 +45,12 @@ def main():
                   '| latency tf -> hair_state, median / p99 | %.1f / %.1f ms |' % (
                       node['state_latency_ms_p50'], node['state_latency_ms_p99']),
                   '| bytes per hair_markers message | %s |' % format(int(node['bytes_per_message']), ',')]
+        if 'state_only_cpu_share' in node:
+            lines += ['', '| node, hair_state alone subscribed (the rviz display plugin) | value |', '|---|---|',
+                      '| CPU share of one core | %.1f %% |' % (100.0 * node['state_only_cpu_share']),
+                      '| hair_state rate | %.1f Hz |' % node['state_only_rate_hz'],
+                      '| latency tf -> hair_state, median / p99 | %.1f / %.1f ms |' % (
+                          node['state_only_latency_ms_p50'], node['state_only_latency_ms_p99'])]
     elif node:
         lines += ['', 'node: ' + node['error']]
     cpu = context.get('mhz_per_cpu')
