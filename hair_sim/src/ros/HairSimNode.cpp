@@ -139,7 +139,9 @@ bool HairSimNode::lookupPose(const std::string& frame, const ros::Time& stamp, I
   }
   try {
     const geometry_msgs::TransformStamped t =
-        tf_buffer_.lookupTransform(config_.world_frame, frame, stamp, ros::Duration(0.0));
+        // Without a timeout: tf2_ros::Buffer's timeout overload logs an error on every call when no
+        // dedicated thread fills the buffer (this node fills it itself, in onTf).
+        tf_buffer_.lookupTransform(config_.world_frame, frame, stamp);
     pose = tf2::transformToEigen(t);
     if (found) *found = t.header.stamp;
     if (!pose.matrix().allFinite()) {
@@ -418,8 +420,25 @@ void HairSimNode::update(bool from_tf) {
       if (!lookupPose(config_.bodies[b].frame, sim_time_, frames[b])) return;
     last_body_frames_ = frames;
   }
-  publishOutputs(sim_time_);
-  publishBodies(sim_time_, last_body_frames_);
+  // The outputs show the newest head pose: caught up with it, the hair's shape (kept in the head
+  // frame) is that of the last substep, at most one substep before `target`, carried rigidly with the
+  // head for the rest of the way, and stamped `target`, so that they reflect the tf that came in, with
+  // the bodies at the same time. Otherwise (a lookup failed) the last substep's pose and time.
+  ros::Time stamp = sim_time_;
+  Iso3 pose = head_.state().pose;
+  std::vector<Iso3>* body_frames = &last_body_frames_;
+  if (target > sim_time_ && sim_time_ + ros::Duration(dt) > target) {
+    bool frames_ok = true;
+    for (std::size_t b = 0; b < config_.bodies.size() && frames_ok; ++b)
+      frames_ok = lookupPose(config_.bodies[b].frame, target, frames[b]);
+    if (frames_ok) {
+      stamp = target;
+      pose = latest_pose;
+      body_frames = &frames;
+    }
+  }
+  publishOutputs(stamp, pose, *body_frames);
+  publishBodies(stamp, *body_frames);
   ++status_publishes_;
   if (from_tf) {  // from the tf message's arrival to the outputs handed to the transport
     const double took = (ros::WallTime::now() - tf_received_).toSec();
@@ -445,16 +464,16 @@ void HairSimNode::update(bool from_tf) {
   }
 }
 
-void HairSimNode::publishOutputs(const ros::Time& stamp) {
-  const Iso3& pose = head_.state().pose;
+void HairSimNode::publishOutputs(const ros::Time& stamp, const Iso3& pose,
+                                 const std::vector<Iso3>& body_frames) {
   simulator_->positionsWorld(pose, world_points_);
   if (state_pub_.getNumSubscribers() > 0)  // shared pointers: zero-copy in a nodelet
     state_pub_.publish(boost::make_shared<hair_sim_msgs::HairState>(
         makeHairState(*simulator_, world_points_, config_.world_frame, stamp)));
   if (markers_pub_.getNumSubscribers() == 0) return;
   std::vector<Ellipsoid> bodies;
-  for (std::size_t b = 0; b < config_.bodies.size() && b < last_body_frames_.size(); ++b)
-    bodies.push_back(config_.bodies[b].shape.transformed(last_body_frames_[b]));
+  for (std::size_t b = 0; b < config_.bodies.size() && b < body_frames.size(); ++b)
+    bodies.push_back(config_.bodies[b].shape.transformed(body_frames[b]));
   meshes_->build(world_points_, simulator_->stripOffsets(), simulator_->hairstyle().scalp.transformed(pose),
                  bodies);
   markers_pub_.publish(boost::make_shared<visualization_msgs::MarkerArray>(

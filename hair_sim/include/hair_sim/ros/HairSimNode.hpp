@@ -51,7 +51,8 @@ class HairSimNode {
   /// `found` receives the stamp of the transform used.
   bool lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose, ros::Time* found = nullptr);
   Vec3 windAt(double t) const;
-  void publishOutputs(const ros::Time& stamp);
+  /// hair_state and hair_markers: the hair drawn with the head at `pose`, bodies at `body_frames`.
+  void publishOutputs(const ros::Time& stamp, const Iso3& pose, const std::vector<Iso3>& body_frames);
   void publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames);
   /// Takes the live settings (dynamic_reconfigure) changed since the last call, between two substeps.
   void applyLiveSettings();
