@@ -36,7 +36,7 @@ if [ -z "$pid" ]; then
   echo "bench: hair_sim_node did not start (log: $B/bench_node.log)" >&2
   echo '{"error": "hair_sim_node did not start"}' >"$B/node.json"
 else
-  timeout $((2 * NODE_SECONDS + 60)) /usr/bin/python3 "$ROOT/scripts/bench_node.py" "$pid" "$NODE_SECONDS" >"$B/node.json" ||
+  timeout $((2 * NODE_SECONDS + 60)) /usr/bin/python3 "$ROOT/scripts/bench_node.py" "$pid" "$NODE_SECONDS" "$B/devel/lib/hair_sim/latency_probe" >"$B/node.json" ||
     echo '{"error": "the node measurement failed"}' >"$B/node.json"
 fi
 /usr/bin/python3 "$ROOT/scripts/bench_table.py" "$B/bench.json" "$B/node.json" | tee "$B/benchmarks.md"

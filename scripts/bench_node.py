@@ -3,98 +3,76 @@
 
   cpu      share of one core used by the node's process over the window (/proc/PID/stat utime+stime)
   rate     hair_markers messages per second received
-  latency  receipt time of each hair_markers (and hair_state) message minus its header.stamp, which is the stamp of
-           the newest head tf the markers reflect (head_driver stamps tf with the time it sends it):
-           from a tf update to the markers that reflect it, transport both ways included
+  latency  receipt time of each hair_markers (and hair_state) message in a C++ subscriber (latency_probe,
+           after deserialisation, as rviz receives it) minus its header.stamp, which is the stamp of the
+           newest head tf the output reflects (head_driver stamps tf with the time it sends it): from a tf
+           update to the markers that reflect it, transport both ways included
   bytes    serialized size of each hair_markers message
 Then a second window with hair_state alone subscribed (as with the rviz display plugin): CPU, rate,
 latency.
 
-Prints one JSON object. Usage: bench_node.py PID SECONDS
+Prints one JSON object. Usage: bench_node.py PID SECONDS PROBE (PROBE: the latency_probe executable)
 """
 import json
-import struct
+import os
+import subprocess
 import sys
 import time
-
-import rospy
 
 
 def cpu_seconds(pid):
     with open('/proc/%d/stat' % pid) as f:
         fields = f.read().rsplit(')', 1)[1].split()
     # fields[0] is the state (field 3); utime and stime are fields 14 and 15.
-    import os
     ticks = os.sysconf(os.sysconf_names['SC_CLK_TCK'])
     return (int(fields[11]) + int(fields[12])) / ticks
 
 
-def percentile(values, p):
-    values = sorted(values)
-    k = min(len(values) - 1, max(0, int(round(p / 100.0 * (len(values) - 1)))))
-    return values[k]
+def window(pid, seconds, probe, markers):
+    """One measuring window: the probe's latencies and the node's CPU share over the same time."""
+    proc = subprocess.Popen([probe, '_seconds:=%g' % seconds, '_markers:=%s' % ('true' if markers else 'false')],
+                            stdout=subprocess.PIPE, universal_newlines=True)
+    line = proc.stdout.readline().strip()
+    if line != 'recording':
+        proc.wait()
+        return json.loads(line) if line.startswith('{') else {'error': 'latency_probe: %r' % line}
+    cpu0, wall0 = cpu_seconds(pid), time.time()
+    result = json.loads(proc.stdout.readline())
+    cpu1, wall1 = cpu_seconds(pid), time.time()
+    proc.wait()
+    result['cpu_share'] = (cpu1 - cpu0) / (wall1 - wall0)
+    return result
 
 
 def main():
-    pid, seconds = int(sys.argv[1]), float(sys.argv[2])
-    rospy.init_node('bench_node', anonymous=True)
-    latencies, sizes, state_latencies = [], [], []
-
-    def on_state(msg):
-        # HairState: Header first: uint32 seq, uint32 secs, uint32 nsecs.
-        secs, nsecs = struct.unpack_from('<II', msg._buff, 4)
-        state_latencies.append(rospy.get_rostime().to_sec() - (secs + 1e-9 * nsecs))
-
-    def on_markers(msg):
-        now = rospy.get_rostime().to_sec()
-        raw = msg._buff
-        # MarkerArray: uint32 count, then the first Marker's Header: uint32 seq, uint32 secs, uint32 nsecs.
-        secs, nsecs = struct.unpack_from('<II', raw, 8)
-        latencies.append(now - (secs + 1e-9 * nsecs))
-        sizes.append(len(raw))
-
-    markers_sub = rospy.Subscriber('hair_markers', rospy.AnyMsg, on_markers, queue_size=100, buff_size=1 << 26)
-    rospy.Subscriber('hair_state', rospy.AnyMsg, on_state, queue_size=100, buff_size=1 << 22)
-    deadline = time.time() + 30.0
-    while not latencies and time.time() < deadline:
-        time.sleep(0.05)
-    if not latencies:
-        print(json.dumps({'error': 'no hair_markers within 30 s'}))
+    pid, seconds, probe = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
+    both = window(pid, seconds, probe, True)
+    if 'error' in both:
+        print(json.dumps(both))
         sys.exit(1)
-    time.sleep(2.0)  # let the subscription settle
-    del latencies[:]
-    del sizes[:]
-    del state_latencies[:]
-    cpu0, wall0 = cpu_seconds(pid), time.time()
-    time.sleep(seconds)
-    cpu1, wall1 = cpu_seconds(pid), time.time()
-    n = len(latencies)
+    m, s = both['markers'], both['state']
     result = {
-        'seconds': wall1 - wall0,
-        'cpu_share': (cpu1 - cpu0) / (wall1 - wall0),
-        'rate_hz': n / (wall1 - wall0),
-        'latency_ms_p50': 1e3 * percentile(latencies, 50),
-        'latency_ms_p99': 1e3 * percentile(latencies, 99),
-        'latency_ms_max': 1e3 * max(latencies),
-        'bytes_per_message': sum(sizes) / n,
-        'state_latency_ms_p50': 1e3 * percentile(state_latencies, 50),
-        'state_latency_ms_p99': 1e3 * percentile(state_latencies, 99),
-        'messages': n,
+        'seconds': both['seconds'],
+        'cpu_share': both['cpu_share'],
+        'rate_hz': m['rate_hz'],
+        'latency_ms_p50': m['latency_ms_p50'],
+        'latency_ms_p99': m['latency_ms_p99'],
+        'latency_ms_max': m['latency_ms_max'],
+        'bytes_per_message': m['bytes'],
+        'state_latency_ms_p50': s['latency_ms_p50'],
+        'state_latency_ms_p99': s['latency_ms_p99'],
+        'messages': m['messages'],
     }
     # Second window: hair_state alone (what the rviz display hair_sim/HairDisplay subscribes to); the
     # node builds no markers without a subscriber.
-    markers_sub.unregister()
-    time.sleep(2.0)
-    del state_latencies[:]
-    cpu0, wall0 = cpu_seconds(pid), time.time()
-    time.sleep(seconds)
-    cpu1, wall1 = cpu_seconds(pid), time.time()
-    result.update({
-        'state_only_cpu_share': (cpu1 - cpu0) / (wall1 - wall0),
-        'state_only_rate_hz': len(state_latencies) / (wall1 - wall0),
-        'state_only_latency_ms_p50': 1e3 * percentile(state_latencies, 50),
-        'state_only_latency_ms_p99': 1e3 * percentile(state_latencies, 99),
-    })
+    alone = window(pid, seconds, probe, False)
+    if 'error' not in alone:
+        result.update({
+            'state_only_cpu_share': alone['cpu_share'],
+            'state_only_rate_hz': alone['state']['rate_hz'],
+            'state_only_latency_ms_p50': alone['state']['latency_ms_p50'],
+            'state_only_latency_ms_p99': alone['state']['latency_ms_p99'],
+        })
     print(json.dumps(result))
 
 

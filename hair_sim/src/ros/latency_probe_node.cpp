@@ -1,0 +1,100 @@
+/// latency_probe: measures hair_sim_node's outputs from outside, as a C++ viewer (rviz) receives them.
+/// Subscribes to hair_state and (with ~markers true) hair_markers, waits for the first message, lets the
+/// subscription settle, then for ~seconds records each message's latency: ROS time at receipt (after
+/// deserialisation, as a viewer's callback sees it) minus header.stamp, which is the stamp of the newest
+/// head tf the output reflects (head_driver stamps tf when it sends it). Prints the line "recording" when
+/// the window starts, then one JSON object:
+///   {"seconds", "state": {...}, "markers": {...}} with messages, rate_hz, latency_ms_p50/p99/max, bytes.
+/// Used by scripts/bench_node.py (./run.sh bench). Exits 1 if no message came within ~wait (s, 30).
+#include <hair_sim_msgs/HairState.h>
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace {
+
+struct Series {
+  std::vector<double> latencies;  ///< s
+  double bytes = 0.0;
+  bool recording = false;
+  bool seen = false;
+
+  void add(const ros::Time& stamp, std::size_t size) {
+    seen = true;
+    if (!recording) return;
+    latencies.push_back((ros::Time::now() - stamp).toSec());
+    bytes += static_cast<double>(size);
+  }
+
+  std::string json(double seconds) const {
+    std::vector<double> v = latencies;
+    std::sort(v.begin(), v.end());
+    auto at = [&](double p) {
+      if (v.empty()) return 0.0;
+      const auto k = static_cast<std::size_t>(p / 100.0 * static_cast<double>(v.size() - 1) + 0.5);
+      return 1e3 * v[std::min(k, v.size() - 1)];
+    };
+    char out[256];
+    std::snprintf(
+        out, sizeof out,
+        "{\"messages\": %zu, \"rate_hz\": %.3f, \"latency_ms_p50\": %.3f, \"latency_ms_p99\": %.3f, "
+        "\"latency_ms_max\": %.3f, \"bytes\": %.0f}",
+        v.size(), static_cast<double>(v.size()) / seconds, at(50), at(99), v.empty() ? 0.0 : 1e3 * v.back(),
+        v.empty() ? 0.0 : bytes / static_cast<double>(v.size()));
+    return out;
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "latency_probe", ros::init_options::AnonymousName);
+  ros::NodeHandle nh, pnh("~");
+  const double seconds = pnh.param("seconds", 10.0);
+  const double wait = pnh.param("wait", 30.0);
+  const bool markers = pnh.param("markers", true);
+  if (!(seconds > 0.0 && wait > 0.0)) {
+    ROS_FATAL("latency_probe: ~seconds (%g) and ~wait (%g) must be > 0", seconds, wait);
+    return 2;
+  }
+  Series state, mesh;
+  ros::Subscriber state_sub = nh.subscribe<hair_sim_msgs::HairState>(
+      "hair_state", 100, [&](const hair_sim_msgs::HairState::ConstPtr& m) {
+        state.add(m->header.stamp, ros::serialization::serializationLength(*m));
+      });
+  ros::Subscriber markers_sub;
+  if (markers)
+    markers_sub = nh.subscribe<visualization_msgs::MarkerArray>(
+        "hair_markers", 100, [&](const visualization_msgs::MarkerArray::ConstPtr& m) {
+          if (!m->markers.empty())
+            mesh.add(m->markers.front().header.stamp, ros::serialization::serializationLength(*m));
+        });
+  auto spinFor = [](double s) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(s);
+    while (ros::ok() && ros::WallTime::now() < end)
+      ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.01));
+  };
+  const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(wait);
+  while (ros::ok() && !(state.seen && (!markers || mesh.seen)) && ros::WallTime::now() < give_up)
+    spinFor(0.05);
+  if (!(state.seen && (!markers || mesh.seen))) {
+    std::printf("{\"error\": \"no %s within %g s\"}\n", state.seen ? "hair_markers" : "hair_state", wait);
+    return 1;
+  }
+  spinFor(2.0);  // let the subscriptions settle
+  std::printf("recording\n");  // bench_node.py starts its CPU window here
+  std::fflush(stdout);
+  state.recording = mesh.recording = true;
+  const ros::WallTime start = ros::WallTime::now();
+  spinFor(seconds);
+  const double took = (ros::WallTime::now() - start).toSec();
+  std::printf("{\"seconds\": %.3f, \"state\": %s", took, state.json(took).c_str());
+  if (markers) std::printf(", \"markers\": %s", mesh.json(took).c_str());
+  std::printf("}\n");
+  return 0;
+}
