@@ -42,6 +42,7 @@ import tf2_ros
 import yaml
 from hair_sim_msgs.msg import HairState
 from hair_sim_msgs.srv import Reset, ResetRequest
+from rosgraph_msgs.msg import Log
 from visualization_msgs.msg import Marker, MarkerArray
 
 PKG = 'hair_sim'
@@ -231,6 +232,7 @@ class HairNodeChecks(unittest.TestCase):
     marker_problems = []
     marker_parser_checked = False
     processed = []  # (stamp seconds, head Pose, state) for states whose head pose was found
+    node_errors = []  # ERROR/FATAL lines of the hair node on /rosout
 
     @classmethod
     def setUpClass(cls):
@@ -248,6 +250,8 @@ class HairNodeChecks(unittest.TestCase):
         cls.state_sub = rospy.Subscriber('hair_state', HairState, cls.on_state, queue_size=200)
         cls.marker_sub = rospy.Subscriber('hair_markers', rospy.AnyMsg, cls.on_markers, queue_size=5,
                                           buff_size=1 << 24)
+        cls.node_name = rospy.get_param('~node', '/hair_sim')
+        cls.rosout_sub = rospy.Subscriber('/rosout', Log, cls.on_log, queue_size=1000)
         cls.next_index = 0
 
     # -- callbacks (rospy threads): record only
@@ -255,6 +259,12 @@ class HairNodeChecks(unittest.TestCase):
     def on_state(cls, msg):
         with cls.lock:
             cls.states.append(msg)
+
+    @classmethod
+    def on_log(cls, msg):
+        if msg.name == cls.node_name and msg.level >= Log.ERROR:
+            with cls.lock:
+                cls.node_errors.append(msg.msg)
 
     @classmethod
     def on_markers(cls, raw):
@@ -444,6 +454,13 @@ class HairNodeChecks(unittest.TestCase):
         rospy.loginfo('%s: %d hair_markers messages checked', NAME, count)
         self.assertTrue(self.marker_parser_checked, 'the marker reader was never checked against genpy')
         self.assertEqual(problems, [], 'malformed hair_markers: %s' % '\n'.join(problems))
+
+    # -- (e) a normal run logs no error (tf2_ros's Buffer once logged one on every lookup with a timeout)
+    def test_e_no_errors_logged(self):
+        self.wait_for(lambda: self.marker_count >= 30, 15.0, '30 hair_markers messages')
+        with self.lock:
+            errors = list(self.node_errors)
+        self.assertEqual(errors[:3], [], '%d errors logged by %s, first ones above' % (len(errors), self.node_name))
 
 
 if __name__ == '__main__':
