@@ -25,6 +25,39 @@ PhysicsParameters bare() {
   return p;
 }
 
+/// The rotation helpers against their definitions: minimalRotation(a, b) is a proper rotation taking a
+/// onto b about the axis a x b (so it fixes that axis) by the angle between them, the same rotation as
+/// rotateByVector(rotationVectorBetween(a, b), .) and as Eigen's AngleAxis.
+TEST(RotationHelpers, MinimalRotationIsTheRotationAboutAxB) {
+  std::srand(7);
+  for (int k = 0; k < 200; ++k) {
+    const Vec3 a = Vec3::Random().normalized();
+    Vec3 b = Vec3::Random().normalized();
+    if (k % 50 == 0) b = (a + 1e-7 * Vec3::Random()).normalized();   // nearly parallel
+    if (k % 50 == 1) b = (-a + 1e-3 * Vec3::Random()).normalized();  // nearly opposite
+    const Mat3 R = minimalRotation(a, b);
+    // Rodrigues divides by 1 + a.b: rounding grows as 1 / (1 + a.b) for nearly opposite vectors.
+    const double tol = 1e-12 + 1e-15 / (1.0 + a.dot(b));
+    EXPECT_LT((R * R.transpose() - Mat3::Identity()).cwiseAbs().maxCoeff(), tol);
+    EXPECT_NEAR(R.determinant(), 1.0, tol);
+    EXPECT_LT((R * a - b).norm(), tol);
+    const Vec3 axis = a.cross(b);
+    if (axis.norm() > 1e-6) {
+      EXPECT_LT((R * axis - axis).norm(), tol * (1.0 + axis.norm()));
+      const Mat3 expected =
+          Eigen::AngleAxisd(std::atan2(axis.norm(), a.dot(b)), axis.normalized()).toRotationMatrix();
+      EXPECT_LT((R - expected).cwiseAbs().maxCoeff(), 10 * tol);
+      const Vec3 v = Vec3::Random();
+      EXPECT_LT((rotateByVector(rotationVectorBetween(a, b), v) - R * v).norm(), 10 * tol * (1.0 + v.norm()));
+    }
+  }
+  // Exactly opposite: a half turn about a perpendicular axis.
+  const Vec3 a = Vec3::UnitZ();
+  const Mat3 R = minimalRotation(a, -a);
+  EXPECT_LT((R * a + a).norm(), 1e-12);
+  EXPECT_NEAR(R.determinant(), 1.0, 1e-12);
+}
+
 /// Signed angle of the first segment of column 0 about +x, from straight down (-z).
 double firstAngle(const Simulator& sim) {
   const Vec3 d = sim.positionsHead()[2] - sim.positionsHead()[0];  // row 1, column 0 (2 columns)

@@ -47,10 +47,19 @@ Mat3 minimalRotation(const Vec3& a, const Vec3& b) {
     const Vec3 k = anyPerpendicular(a);
     return 2.0 * k * k.transpose() - Mat3::Identity();
   }
+  // Rodrigues for unit a, b: I + [v]x + [v]x^2 / (1 + c) with v = a x b, c = a.b; as [v]x^2 = v v^T - |v|^2 I
+  // and |v|^2 = 1 - c^2, that is c I + [v]x + v v^T / (1 + c) (no matrix product).
   const Vec3 v = a.cross(b);
-  Mat3 vx;
-  vx << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return Mat3::Identity() + vx + vx * vx / (1.0 + c);
+  const Vec3 h = v / (1.0 + c);
+  Mat3 r = v * h.transpose();
+  r.diagonal().array() += c;
+  r(0, 1) -= v.z();
+  r(0, 2) += v.y();
+  r(1, 0) += v.z();
+  r(1, 2) -= v.x();
+  r(2, 0) -= v.y();
+  r(2, 1) += v.x();
+  return r;
 }
 
 double Simulator::inertiaFloor(double stiffness, double damping, double dt) {
@@ -413,33 +422,43 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
   q_prev_.resize(nb);
   pivot_inside_.resize(nb);
   for (std::size_t b = 0; b < nb; ++b) {
-    q_pivot_[b] = now[b].toSphere(pivot);
-    const double reach_end = d / now[b].radii().minCoeff();
-    double reach = reach_end;
+    const Vec3 qp = now[b].toSphere(pivot);
+    q_pivot_[b] = qp;
+    const double n2 = qp.squaredNorm();
+    pivot_inside_[b] = n2 < 1.0;
+    // Out of reach when |q_pivot| > 1 + max(reach_end, |q_prev - q_pivot|) + 1e-9, tested on squares (a
+    // square root only when the first part holds).
+    const double lim = 1.0 + d / now[b].radii().minCoeff() + 1e-9;
+    bool far = n2 > lim * lim;
     if (!before.empty()) {
       q_prev_[b] = before[b].toSphere(previous_end);
-      reach = std::max(reach, (q_prev_[b] - q_pivot_[b]).norm());
+      if (far) {
+        const double spare = std::sqrt(n2) - 1.0 - 1e-9;
+        far = (q_prev_[b] - qp).squaredNorm() < spare * spare;
+      }
     }
-    pivot_inside_[b] = q_pivot_[b].squaredNorm() < 1.0;
-    if (q_pivot_[b].norm() > 1.0 + reach + 1e-9) continue;
+    if (far) continue;
     near_.push_back(b);
     is_near_[b] = 1;
   }
+}
+
+bool Simulator::clearOf(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
+                        bool have_before) const {
+  if (!is_near_[b]) return true;
+  const Vec3 q_end = q_pivot_[b] + d * (now[b].Sinv() * u);
+  if (q_end.squaredNorm() - 1.0 <= 1e-12) return false;
+  if (pivot_inside_[b]) return true;  // a root inside its inflated scalp: only the end point counts
+  if (pathEntersUnitSphere(q_pivot_[b], q_end)) return false;  // the segment cuts through
+  if (have_before && pathEntersUnitSphere(q_prev_[b], q_end)) return false;
+  return true;
 }
 
 Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
                                   const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
   // Validity for one body: end outside, segment not cutting through it (pivot outside), and the end's
   // path over the substep, relative to the moving body, not entering it (the paper's ray test).
-  auto validFor = [&](std::size_t b, const Vec3& u) {
-    if (!is_near_[b]) return true;
-    const Vec3 q_end = q_pivot_[b] + d * (now[b].Sinv() * u);
-    if (q_end.squaredNorm() - 1.0 <= 1e-12) return false;
-    if (pivot_inside_[b]) return true;  // a root inside its inflated scalp: only the end point counts
-    if (pathEntersUnitSphere(q_pivot_[b], q_end)) return false;  // the segment cuts through
-    if (!before.empty() && pathEntersUnitSphere(q_prev_[b], q_end)) return false;
-    return true;
-  };
+  auto validFor = [&](std::size_t b, const Vec3& u) { return clearOf(b, d, u, now, !before.empty()); };
   auto validBodies = [&](const Vec3& u) {
     for (std::size_t b : near_)
       if (!validFor(b, u)) return false;
@@ -588,8 +607,15 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
 
 bool Simulator::stripOutsideBand(std::size_t strip) const {
   const Strip& s = hairstyle_.strips[strip];
-  const std::size_t begin = static_cast<std::size_t>(strip_offset_[strip] + s.columns);
-  const std::size_t end = static_cast<std::size_t>(strip_offset_[strip] + s.pointCount());
+  for (int r = 1; r < s.rows; ++r)
+    if (rowOutsideBand(strip, r)) return true;
+  return false;
+}
+
+bool Simulator::rowOutsideBand(std::size_t strip, int row) const {
+  const Strip& s = hairstyle_.strips[strip];
+  const std::size_t begin = static_cast<std::size_t>(strip_offset_[strip] + s.index(row, 0));
+  const std::size_t end = begin + static_cast<std::size_t>(s.columns);
   const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
   for (std::size_t i = begin; i < end; ++i)
     for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
@@ -618,6 +644,77 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
         direction_[i] = resolveCollisions(static_cast<int>(i), pivot, length_[i], direction_[i], now, before);
         positions_[i] = pivot + length_[i] * direction_[i];
       }
+    }
+  }
+  // Gauss-Seidel moves one end at a time, so when two columns cross (the end of one next to the pivot
+  // of the other) no single move meets the band, though a joint one does: parallel segments keep the
+  // distances of their pivots, which are within the band by induction from the roots (at rest), and
+  // turning them toward each other (or apart) brings their ends closer (or farther) continuously. So,
+  // from the roots out, a row still outside the band gets the directions place(mu) below for the first
+  // mu of 0, +-1/32, +-2/32, ..., +-1 that puts the row within the band with every segment clear of the
+  // bodies (the bodies keep the last word); if none does, the row stays as the passes left it.
+  const bool crossed = stripOutsideBand(strip);
+  row_dirs_.resize(static_cast<std::size_t>(s.columns));
+  for (int r = 1; crossed && r < s.rows; ++r) {
+    auto at = [&](int c) { return static_cast<std::size_t>(offset + s.index(r, c)); };
+    auto pivotOf = [&](int c) -> const Vec3& {
+      return positions_[static_cast<std::size_t>(offset + s.index(r - 1, c))];
+    };
+    for (int c = 0; c < s.columns; ++c) positions_[at(c)] = pivotOf(c) + length_[at(c)] * direction_[at(c)];
+    if (!rowOutsideBand(strip, r)) continue;
+    Vec3 mean = Vec3::Zero(), centre = Vec3::Zero();
+    for (int c = 0; c < s.columns; ++c) {
+      mean += direction_[at(c)];
+      centre += pivotOf(c);
+      row_dirs_[static_cast<std::size_t>(c)] = direction_[at(c)];
+    }
+    if (mean.norm() < 1e-9) continue;
+    mean.normalize();
+    centre /= s.columns;
+    // Inward (mu > 0): toward directions whose ends all meet, d u = d sqrt(1 - (s/d)^2) a + s e with e the
+    // unit vector to the centre, s the distance to it and a the part of m across e: the ends close in
+    // continuously from the pivots' distances (mu = 0, parallel) to 0 (mu = 1). Outward (mu < 0):
+    // m - |mu| e, the ends move apart.
+    auto place = [&](double mu) {
+      for (int c = 0; c < s.columns; ++c) {
+        const double d = length_[at(c)];
+        const Vec3 to_centre = centre - pivotOf(c);
+        const double dist = to_centre.norm();
+        Vec3 u = mean;
+        if (dist > 1e-12) {
+          const Vec3 e = to_centre / dist;
+          if (mu < 0.0) {
+            u = mean + mu * e;
+          } else {
+            Vec3 across = mean - mean.dot(e) * e;
+            across = across.norm() > 1e-9 ? Vec3(across.normalized()) : Vec3(e.unitOrthogonal());
+            const double f = std::min(1.0, dist / d);
+            u = (1.0 - mu) * mean + mu * (std::sqrt(1.0 - f * f) * across + f * e);
+          }
+          if (u.norm() < 1e-12) u = mean;
+        }
+        direction_[at(c)] = u.normalized();
+        positions_[at(c)] = pivotOf(c) + d * direction_[at(c)];
+      }
+    };
+    auto clear = [&]() {
+      for (int c = 0; c < s.columns; ++c) {
+        prepareBodies(pivotOf(c), length_[at(c)], start_pos_[static_cast<std::size_t>(s.index(r, c))], now,
+                      before);
+        for (std::size_t b : near_)
+          if (!clearOf(b, length_[at(c)], direction_[at(c)], now, !before.empty())) return false;
+      }
+      return true;
+    };
+    bool found = false;
+    for (int k = 0; k <= 64 && !found; ++k) {
+      place(((k + 1) / 2) * (k % 2 ? 1.0 : -1.0) / 32.0);
+      found = !rowOutsideBand(strip, r) && clear();
+    }
+    if (found) continue;
+    for (int c = 0; c < s.columns; ++c) {  // back to what the passes left
+      direction_[at(c)] = row_dirs_[static_cast<std::size_t>(c)];
+      positions_[at(c)] = pivotOf(c) + length_[at(c)] * direction_[at(c)];
     }
   }
   collisions_ = saved_collisions;  // the sweep counted the segments turned out of a body
@@ -773,7 +870,8 @@ void Simulator::step(const StepInputs& in) {
         const Vec3 mid_next = pivot + 0.5 * d * next;
         velocity_[i] = (mid_next - previous_mid_[i]) / dt;
         previous_mid_[i] = mid_next;
-        Q = minimalRotation(Q * styled_dir_[i], next) * Q;
+        if (r + 1 < s.rows)
+          Q = minimalRotation(Q * styled_dir_[i], next) * Q;  // the next segment's rest frame
         parent = i;
       }
     }

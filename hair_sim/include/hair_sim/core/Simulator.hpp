@@ -142,12 +142,20 @@ class Simulator {
   /// corrected direction.
   Vec3 resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
                          const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
+  /// Is the segment pivot -> pivot + d * u clear of near body b (prepareBodies first): end outside, the
+  /// segment not cutting through it, the end's path over the substep not entering it?
+  bool clearOf(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
+               bool have_before) const;
   /// Is some within-strip pair of the strip outside the band [proximity, far] x rest length?
   bool stripOutsideBand(std::size_t strip) const;
+  /// The same for the pairs of one row of the strip.
+  bool rowOutsideBand(std::size_t strip, int row) const;
   /// Gauss-Seidel passes over a strip whose band does not hold after the sweep: every segment again
   /// through resolveCollisions from its (possibly moved) pivot, now with every partner in the strip
   /// already moved, so that each pair is kept from both ends. Then rates and velocities are
-  /// recomputed from the state at the start of the substep (start_*_).
+  /// recomputed from the state at the start of the substep (start_*_). Rows the passes leave outside
+  /// the band (columns crossed, so that no single end can meet it) get parallel segments turned toward
+  /// or away from each other to meet it, when those are clear of the bodies.
   void relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
 
   Hairstyle hairstyle_;
@@ -177,6 +185,7 @@ class Simulator {
   std::vector<std::size_t> near_;
   std::vector<Vec3> q_pivot_, q_prev_;
   std::vector<char> pivot_inside_, is_near_;
+  std::vector<Vec3> row_dirs_;  ///< relaxStrip: a row's directions before the parallel fallback
   // The current strip at the start of the substep (positions, directions, segment midpoints).
   std::vector<Vec3> start_pos_, start_dir_, start_mid_;
   std::vector<int> partner_start_;  ///< CSR: partners of point k are [start[k], start[k+1])
