@@ -11,6 +11,7 @@
 
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/util/YamlReader.hpp"
+#include "hair_sim/ros/InputChecks.hpp"
 
 namespace hair_sim {
 
@@ -118,6 +119,19 @@ void HairSimNode::readParameters() {
   if (!(std::isfinite(smoothing) && smoothing >= 0.0 && smoothing <= 1.0))
     throw badParam("head_smoothing", formatDouble(smoothing), "must be in [0, 1] s");
   head_ = HeadMotionEstimator(smoothing);
+  double teleport_distance = 0.5, teleport_angle = 1.0;
+  pnh_.getParam("teleport_distance", teleport_distance);
+  pnh_.getParam("teleport_angle", teleport_angle);
+  if (!(std::isfinite(teleport_distance) && teleport_distance > 0.0))
+    throw badParam("teleport_distance", formatDouble(teleport_distance), "must be > 0 m");
+  if (!(std::isfinite(teleport_angle) && teleport_angle > 0.0))
+    throw badParam("teleport_angle", formatDouble(teleport_angle), "must be > 0 rad");
+  head_.setTeleportLimits(teleport_distance, teleport_angle);
+  teleport_distance_ = teleport_distance;
+  teleport_angle_ = teleport_angle;
+  pnh_.getParam("max_tf_age", max_tf_age_);
+  if (!(std::isfinite(max_tf_age_) && max_tf_age_ > 0.0))
+    throw badParam("max_tf_age", formatDouble(max_tf_age_), "must be > 0 s");
   pnh_.getParam("strands_per_strip", strands_per_strip_);
   if (strands_per_strip_ < 1)
     throw badParam("strands_per_strip", std::to_string(strands_per_strip_), "must be >= 1");
@@ -171,32 +185,22 @@ Vec3 HairSimNode::windAt(double t) const {
 }
 
 void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
+  const std::string problem = checkWind(*msg);
+  if (!problem.empty()) {
+    ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a Wind message: %s; the last good wind holds", problem.c_str());
+    diagnostics_->droppedInput("wind: " + problem);
+    return;
+  }
   const Vec3 v(msg->velocity.x, msg->velocity.y, msg->velocity.z);
-  if (!v.allFinite() || !std::isfinite(msg->turbulence) || !std::isfinite(msg->ramp_time)) {
-    ROS_WARN_THROTTLE(2.0,
-                      "hair_sim: ignored a Wind message with a non-finite velocity, turbulence or ramp_time");
-    diagnostics_->droppedInput("wind: non-finite value");
-    return;
-  }
-  if (msg->turbulence < 0.0 || msg->ramp_time < 0.0) {
-    ROS_WARN_THROTTLE(2.0,
-                      "hair_sim: ignored a Wind message: turbulence %.3f and ramp_time %.3f must be >= 0",
-                      msg->turbulence, msg->ramp_time);
-    diagnostics_->droppedInput("wind: negative turbulence or ramp_time");
-    return;
-  }
-  if (v.norm() > 1000.0) {
-    ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a Wind message: speed %.1f m/s is above 1000 m/s", v.norm());
-    diagnostics_->droppedInput("wind: speed above 1000 m/s");
-    return;
-  }
   Vec3 world = v;
   const std::string frame = msg->header.frame_id;
   if (!frame.empty() && frame != config_.world_frame) {
     Iso3 pose;
     if (!lookupPose(frame, ros::Time(0), pose)) {
-      ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a Wind message in frame '%s': no tf to '%s'", frame.c_str(),
-                        config_.world_frame.c_str());
+      ROS_WARN_THROTTLE(2.0,
+                        "hair_sim: ignored a Wind message: header.frame_id '%s' is unknown (no tf to '%s'); "
+                        "the last good wind holds",
+                        frame.c_str(), config_.world_frame.c_str());
       diagnostics_->droppedInput("wind: no tf from '" + frame + "'");
       return;
     }
@@ -319,14 +323,54 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
   }
   const std::string& authority = event.getPublisherName();
   for (const geometry_msgs::TransformStamped& t : event.getMessage()->transforms) {
+    // A bad transform never enters the buffer (lookups would interpolate with it): the last good
+    // one holds. A non-unit quaternion is normalised (tf2 would refuse it).
+    geometry_msgs::TransformStamped fixed;
+    bool normalised = false;
+    const std::string problem = checkTransform(t, &fixed, &normalised);
+    if (!problem.empty()) {
+      ROS_WARN_THROTTLE(2.0, "hair_sim: ignored tf %s -> %s from %s: transform.%s; the last good pose holds",
+                        t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(),
+                        problem.c_str());
+      diagnostics_->droppedInput("tf " + t.child_frame_id + ": transform." + problem);
+      continue;
+    }
+    if (normalised)
+      ROS_WARN_THROTTLE(5.0, "hair_sim: tf %s -> %s from %s: rotation quaternion of norm %.6g normalised",
+                        t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(),
+                        std::sqrt(t.transform.rotation.x * t.transform.rotation.x +
+                                  t.transform.rotation.y * t.transform.rotation.y +
+                                  t.transform.rotation.z * t.transform.rotation.z +
+                                  t.transform.rotation.w * t.transform.rotation.w));
+    if (!is_static && fixed.child_frame_id == config_.head_frame) holdBeforeJump(fixed, authority);
     try {
-      tf_buffer_.setTransform(t, authority, is_static);
+      tf_buffer_.setTransform(fixed, authority, is_static);
     } catch (const tf2::TransformException& e) {
       ROS_WARN_THROTTLE(5.0, "hair_sim: tf %s -> %s from %s rejected: %s", t.header.frame_id.c_str(),
                         t.child_frame_id.c_str(), authority.c_str(), e.what());
     }
   }
   if (!is_static) update(true);
+}
+
+void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority) {
+  const geometry_msgs::TransformStamped previous = last_head_tf_;
+  last_head_tf_ = t;
+  if (previous.header.frame_id != t.header.frame_id || !(t.header.stamp > previous.header.stamp)) return;
+  const Iso3 a = tf2::transformToEigen(previous), b = tf2::transformToEigen(t);
+  const double distance = (b.translation() - a.translation()).norm();
+  const double angle = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
+  if (distance <= teleport_distance_ && angle <= teleport_angle_) return;
+  // tf would interpolate the jump over the time between the two messages, a whip of the hair across the
+  // scene; held at the old pose until just before the new one, the head jumps within one substep, which
+  // the head motion estimator takes as a teleport (the hair goes with the head rigidly).
+  geometry_msgs::TransformStamped hold = previous;
+  hold.header.stamp = t.header.stamp - ros::Duration(1e-6);
+  if (!(hold.header.stamp > previous.header.stamp)) return;
+  try {
+    tf_buffer_.setTransform(hold, authority, false);
+  } catch (const tf2::TransformException&) {
+  }
 }
 
 void HairSimNode::onTimer(const ros::TimerEvent&) {
@@ -362,6 +406,45 @@ void HairSimNode::update(bool from_tf) {
     ROS_INFO("hair_sim: following %s in %s from t = %.3f", config_.head_frame.c_str(),
              config_.world_frame.c_str(), target.toSec());
   }
+  // A stale head pose (none newer than max_tf_age): the head is held where it was last seen and the hair
+  // goes on moving, up to max_tf_age behind the clock (so that a pose coming in again is not taken for
+  // time going backwards).
+  const ros::Time clock = ros::Time::now();
+  const double age = (clock - target).toSec();
+  const bool stale = age > max_tf_age_;
+  if (stale != head_stale_) {
+    if (stale)
+      ROS_WARN(
+          "hair_sim: the head pose (tf %s -> %s) is %.2f s old (max_tf_age %.2f s): holding the head "
+          "where it was last seen",
+          config_.world_frame.c_str(), config_.head_frame.c_str(), age, max_tf_age_);
+    else
+      ROS_INFO("hair_sim: head pose (tf %s -> %s) fresh again", config_.world_frame.c_str(),
+               config_.head_frame.c_str());
+    head_stale_ = stale;
+  }
+  if (stale && last_body_frames_.size() == config_.bodies.size()) {
+    const ros::Time hold_until = clock - ros::Duration(max_tf_age_);
+    const Iso3 held = head_.state().pose;
+    int held_steps = 0;
+    while (sim_time_ + ros::Duration(dt) <= hold_until && held_steps < max_substeps_per_update_) {
+      const ros::Time t = sim_time_ + ros::Duration(dt);
+      StepInputs in;
+      in.head = head_.update(held, dt);
+      const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
+      in.wind = wind_scale_ * (windAt(t.toSec()) + events.wind);
+      in.turbulence = &events.turbulence;
+      in.gravity = &events.gravity;
+      in.body_frames = last_body_frames_;  // bodies on the head move with it: held too
+      simulator_->step(in);
+      sim_time_ = t;
+      ++held_steps;
+    }
+    if (sim_time_ + ros::Duration(dt) <= hold_until) sim_time_ = hold_until;  // a long stall: skip ahead
+    status_steps_ += held_steps;
+    target = sim_time_;
+    latest_pose = held;
+  }
   // Fixed substeps up to the newest head pose, the pose sampled (interpolated by tf) at each.
   const ros::WallTime wall_start = ros::WallTime::now();
   int steps = 0;
@@ -388,6 +471,15 @@ void HairSimNode::update(bool from_tf) {
     if (!frames_ok) break;
     StepInputs in;
     in.head = head_.update(pose, dt);
+    if (head_.teleported()) {
+      simulator_->forgetBodyMotion();
+      ROS_WARN(
+          "hair_sim: the head jumped %.3f m and %.3f rad within one substep at t = %.3f (teleport_distance "
+          "%.3f m, teleport_angle %.3f rad): the hair goes with it rigidly",
+          head_.jumpDistance(), head_.jumpAngle(), t.toSec(), teleport_distance_, teleport_angle_);
+      diagnostics_->droppedInput("head teleport of " + formatDouble(head_.jumpDistance()) + " m, " +
+                                 formatDouble(head_.jumpAngle()) + " rad");
+    }
     const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
     in.wind = wind_scale_ * (windAt(t.toSec()) + events.wind);
     in.turbulence = &events.turbulence;

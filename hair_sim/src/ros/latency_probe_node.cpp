@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
     std::printf("{\"error\": \"no %s within %g s\"}\n", state.seen ? "hair_markers" : "hair_state", wait);
     return 1;
   }
-  spinFor(2.0);  // let the subscriptions settle
+  spinFor(2.0);                // let the subscriptions settle
   std::printf("recording\n");  // bench_node.py starts its CPU window here
   std::fflush(stdout);
   state.recording = mesh.recording = true;

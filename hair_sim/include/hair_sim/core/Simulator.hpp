@@ -91,6 +91,9 @@ class Simulator {
   int controlPointCount() const { return static_cast<int>(positions_.size()); }
   /// All control points, head frame, strip by strip, each row-major (the hairstyle's order).
   const std::vector<Vec3>& positionsHead() const { return positions_; }
+  /// After a teleport of the head: the bodies' previous poses no longer count (no swept test across the
+  /// jump); the hair, kept in the head frame, goes with the head rigidly.
+  void forgetBodyMotion() { have_bodies_before_ = false; }
   /// First index of each strip in positionsHead().
   const std::vector<int>& stripOffsets() const { return strip_offset_; }
   /// Control points in the world frame for the given head pose.

@@ -1,6 +1,7 @@
 #pragma once
 /// ROS glue of hair_sim: parameters, the head pose through tf2, wind commands, the fixed-step loop,
 /// markers and state out, the reset service. The physics lives in the ROS-free core.
+#include <geometry_msgs/TransformStamped.h>
 #include <hair_sim_msgs/HairEvent.h>
 #include <hair_sim_msgs/Reset.h>
 #include <hair_sim_msgs/Trigger.h>
@@ -39,6 +40,9 @@ class HairSimNode {
   /// Steps to the newest head pose and publishes if due (from_tf) or always (the timer, which only
   /// acts while no tf has come in for 1.5 output periods).
   void update(bool from_tf);
+  /// A head transform that jumps beyond the teleport limits from the previous one: the previous one is
+  /// put in the buffer again just before it, so that the jump falls within one substep (a teleport).
+  void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
   void onWind(const hair_sim_msgs::Wind::ConstPtr& msg);
   bool onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response);
   void onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg);
@@ -73,6 +77,10 @@ class HairSimNode {
   RenderMode render_mode_ = RenderMode::Mesh;
   HairMeshOptions mesh_options_;
   int max_substeps_per_update_ = 60;
+  double max_tf_age_ = 0.5;  ///< s: a newer head pose than this is expected; older = stale
+  bool head_stale_ = false;
+  double teleport_distance_ = 0.5, teleport_angle_ = 1.0;  ///< m, rad (between two head tf messages)
+  geometry_msgs::TransformStamped last_head_tf_;           ///< the newest head transform received
   int strands_per_strip_ = 6;
 
   std::unique_ptr<Simulator> simulator_;

@@ -1,5 +1,7 @@
 #pragma once
 /// The head's pose and its time derivatives, all in the world frame, at one substep.
+#include <limits>
+
 #include "hair_sim/core/TypeDefs.hpp"
 
 namespace hair_sim {
@@ -26,13 +28,27 @@ class HeadMotionEstimator {
   explicit HeadMotionEstimator(double smoothing_time = 0.0) : tau_(smoothing_time) {}
   /// Head at rest at this pose.
   void reset(const Iso3& pose);
-  /// The state at the next substep (dt > 0 after it).
+  /// The state at the next substep (dt > 0 after it). A jump farther than the teleport limits from the
+  /// previous pose is a teleport: the head is at rest at the new pose (no velocity or acceleration from
+  /// the jump), and teleported() says so until the next update.
   HeadState update(const Iso3& pose, double dt);
   const HeadState& state() const { return state_; }
+
+  /// Teleport limits: a move of more than `distance` (m) or a turn of more than `angle` (rad) within one
+  /// substep (both > 0; infinity = never, the default). Throws std::invalid_argument otherwise.
+  void setTeleportLimits(double distance, double angle);
+  /// Was the last update a teleport? Then jump() gives its distance (m) and angle (rad).
+  bool teleported() const { return teleported_; }
+  double jumpDistance() const { return jump_distance_; }
+  double jumpAngle() const { return jump_angle_; }
 
  private:
   HeadState state_;
   double tau_ = 0.0;
+  double teleport_distance_ = std::numeric_limits<double>::infinity();
+  double teleport_angle_ = std::numeric_limits<double>::infinity();
+  bool teleported_ = false;
+  double jump_distance_ = 0.0, jump_angle_ = 0.0;
 };
 
 }  // namespace hair_sim
