@@ -83,6 +83,17 @@ case "$cmd" in
     cmake --build build --target tests -j"$(nproc)"
     cd build && ctest --output-on-failure -j"$(nproc)"
     ;;
+  load)
+    # Load test (issue 8): tf and Wind at 1 kHz into the node for SECONDS (default 60); figures in build/load.json.
+    install_deps
+    build
+    seconds=${2:-60}
+    # test/ is beside the package: rostest is told which package the test belongs to (as CTest does).
+    timeout $((2 * seconds + 180)) build/devel/env.sh rostest --pkgdir="$ROOT/hair_sim" --package=hair_sim --text \
+      "$ROOT/test/load.test" seconds:="$seconds" out:="$ROOT/build/load.json" && status=0 || status=$?
+    cat build/load.json 2>/dev/null || echo "run.sh: no figures (build/load.json)" >&2
+    exit $status
+    ;;
   *)
     echo "usage: ./run.sh demo | test | offline-demo | bench [benchmark flags] | build" >&2
     exit 2

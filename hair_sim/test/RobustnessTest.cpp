@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "TestUtil.hpp"
@@ -12,6 +13,7 @@
 #include "hair_sim/core/dynamics/HeadState.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
+#include "hair_sim/tools/OfflineRunner.hpp"
 
 namespace hair_sim {
 namespace {
@@ -169,6 +171,87 @@ TEST(RobustnessTest, TeleportMovesTheHairRigidlyWithTheHead) {
   for (std::size_t i = 0; i < still.size(); ++i) moved = std::max(moved, (whipped[i] - still[i]).norm());
   EXPECT_GT(moved, 0.01);
   EXPECT_GT(rate_whip, 10.0 * rate_still);
+}
+
+/// Head pose at a world position, upright.
+Iso3 headAt(const Vec3& p) {
+  Iso3 pose = Iso3::Identity();
+  pose.translation() = p;
+  return pose;
+}
+
+TEST(RobustnessTest, TeleportOntoTheWorldBodiesLeavesNoPointInside) {
+  // The hair settles on the head at its rest place (0, 0, 1.6), then the head teleports to the same place
+  // rolled 1.2 rad to its left (above teleport_angle 1.0): carried rigidly, the hair of its right side swings
+  // into the left shoulder (in world), and the collision projection of that very substep must leave no
+  // control point inside an inflated body.
+  const SimConfig config = defaultConfig();
+  Simulator sim(loadHairstyle(config.hairstyle_file), config.physics, config.bodies);
+  HeadMotionEstimator head;
+  head.setTeleportLimits(0.5, 1.0);
+  const Iso3 upright = headAt(Vec3(0.0, 0.0, 1.6));
+  Iso3 rolled = upright;
+  rolled.linear() = Eigen::AngleAxisd(1.2, Vec3::UnitX()).toRotationMatrix();
+  head.reset(upright);
+  const double dt = config.physics.substep;
+  int teleports = 0;
+  double depth_before_step = 0.0, worst_after = 0.0, worst_length = 0.0;
+  for (int i = 1; i <= 240; ++i) {
+    const Iso3 pose = i > 120 ? rolled : upright;
+    StepInputs in;
+    in.head = head.update(pose, dt);
+    if (head.teleported()) {
+      ++teleports;
+      sim.forgetBodyMotion();
+      depth_before_step = deepest(sim, config, pose);  // the hair carried rigidly, before the projection
+    }
+    in.body_frames = bodyFrames(config, pose);
+    sim.step(in);
+    ASSERT_TRUE(allFinite(sim)) << "substep " << i;
+    worst_length = std::max(worst_length, maxLengthError(sim));
+    if (i > 120) worst_after = std::max(worst_after, deepest(sim, config, pose));
+  }
+  EXPECT_EQ(teleports, 1);
+  RecordProperty("depth_before_projection_mm", std::to_string(1e3 * depth_before_step));
+  EXPECT_GT(depth_before_step, 0.005) << "the test's premise: carried rigidly, hair lands inside a body";
+  EXPECT_LE(worst_after, 1e-9);
+  EXPECT_LT(worst_length, 1e-9);
+}
+
+TEST(RobustnessTest, OfflineRunnerCountsTeleportsAndKeepsTheHairSane) {
+  // Scenario keyframes: still 0.6 m to the left for 1 s, then at the head's rest place 1 ms later.
+  Scenario scenario;
+  scenario.duration = 1.5;
+  scenario.output_rate = 30.0;
+  HeadKey a, b, c, d;
+  a.t = 0.0;
+  a.position = Vec3(0.0, 0.6, 1.75);
+  b = a;
+  b.t = 1.0;
+  c.t = 1.001;
+  c.position = Vec3(0.0, 0.0, 1.6);
+  d = c;
+  d.t = 1.5;
+  scenario.head = {a, b, c, d};
+  const SimConfig config = defaultConfig();
+  auto run = [&](double distance) {
+    OfflineRunner runner(config, loadHairstyle(config.hairstyle_file), scenario);
+    RunOptions options;
+    options.teleport_distance = distance;
+    return runner.run(nullptr, options);
+  };
+  const RunSummary limited = run(0.5);  // the default
+  EXPECT_EQ(limited.teleports, 1);
+  EXPECT_TRUE(limited.all_finite);
+  EXPECT_LE(limited.max_penetration_m, 1e-9);
+  // Without a teleport limit the 0.6 m jump is a 150 m/s head: the hair whips (the check can fail).
+  const RunSummary whipped = run(1e9);
+  EXPECT_EQ(whipped.teleports, 0);
+  EXPECT_GT(whipped.max_segment_rate, 2.0 * limited.max_segment_rate);
+  RunOptions bad;
+  bad.teleport_angle = -1.0;
+  OfflineRunner runner(config, loadHairstyle(config.hairstyle_file), scenario);
+  EXPECT_THROW(runner.run(nullptr, bad), std::invalid_argument);
 }
 
 }  // namespace

@@ -318,6 +318,8 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
     if (now < last_tf_receipt_) {
       ROS_WARN("hair_sim: time jumped back %.3f s: clearing the tf buffer", (last_tf_receipt_ - now).toSec());
       tf_buffer_.clear();
+      newest_tf_stamp_.clear();
+      last_head_tf_ = geometry_msgs::TransformStamped();
     }
     last_tf_receipt_ = now;
   }
@@ -342,6 +344,7 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
                                   t.transform.rotation.y * t.transform.rotation.y +
                                   t.transform.rotation.z * t.transform.rotation.z +
                                   t.transform.rotation.w * t.transform.rotation.w));
+    if (!is_static && !acceptTfStamp(fixed, authority)) continue;
     if (!is_static && fixed.child_frame_id == config_.head_frame) holdBeforeJump(fixed, authority);
     try {
       tf_buffer_.setTransform(fixed, authority, is_static);
@@ -355,8 +358,9 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
 
 void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority) {
   const geometry_msgs::TransformStamped previous = last_head_tf_;
+  if (!(t.header.stamp > previous.header.stamp)) return;  // out of order: the newest one stays the reference
   last_head_tf_ = t;
-  if (previous.header.frame_id != t.header.frame_id || !(t.header.stamp > previous.header.stamp)) return;
+  if (previous.header.frame_id != t.header.frame_id) return;
   const Iso3 a = tf2::transformToEigen(previous), b = tf2::transformToEigen(t);
   const double distance = (b.translation() - a.translation()).norm();
   const double angle = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
@@ -371,6 +375,46 @@ void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const
     tf_buffer_.setTransform(hold, authority, false);
   } catch (const tf2::TransformException&) {
   }
+}
+
+bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const std::string& authority) {
+  ros::Time& newest = newest_tf_stamp_[t.child_frame_id];
+  const ros::Time& stamp = t.header.stamp;
+  if (stamp.isZero()) {
+    ROS_WARN_THROTTLE(5.0, "hair_sim: ignored tf %s -> %s from %s: header.stamp is 0 (not on /tf_static)",
+                      t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str());
+    diagnostics_->droppedInput("tf " + t.child_frame_id + ": header.stamp is 0");
+    return false;
+  }
+  if (stamp > newest) {
+    newest = stamp;
+    return true;
+  }
+  const double behind = (newest - stamp).toSec();
+  if (stamp == newest) {
+    ROS_WARN_THROTTLE(5.0,
+                      "hair_sim: ignored tf %s -> %s from %s: header.stamp %.6f repeats the previous one",
+                      t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(), stamp.toSec());
+    diagnostics_->droppedInput("tf " + t.child_frame_id + ": repeated header.stamp");
+    return false;
+  }
+  if (behind >= tf_buffer_.getCacheLength().toSec()) {
+    ROS_WARN_THROTTLE(
+        5.0,
+        "hair_sim: ignored tf %s -> %s from %s: header.stamp %.6f is %.3f s older than the newest "
+        "(%.6f), beyond the %.1f s tf cache",
+        t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(), stamp.toSec(), behind,
+        newest.toSec(), tf_buffer_.getCacheLength().toSec());
+    diagnostics_->droppedInput("tf " + t.child_frame_id + ": header.stamp older than the tf cache");
+    return false;
+  }
+  ROS_WARN_THROTTLE(
+      5.0,
+      "hair_sim: tf %s -> %s from %s arrived out of order: header.stamp %.6f is %.3f s older than "
+      "the newest (%.6f); taken into the buffer",
+      t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(), stamp.toSec(), behind,
+      newest.toSec());
+  return true;
 }
 
 void HairSimNode::onTimer(const ros::TimerEvent&) {

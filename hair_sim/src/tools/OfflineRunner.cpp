@@ -23,7 +23,7 @@ std::string RunSummary::toJson() const {
     << ", \"max_mesh_penetration_m\": " << formatDouble(max_mesh_penetration_m)
     << ", \"mesh_vertices_projected\": " << mesh_vertices_projected
     << ", \"mesh_vertices\": " << mesh_vertices << ", \"mesh_triangles\": " << mesh_triangles
-    << ", \"all_finite\": " << (all_finite ? "true" : "false") << "}";
+    << ", \"all_finite\": " << (all_finite ? "true" : "false") << ", \"teleports\": " << teleports << "}";
   return o.str();
 }
 
@@ -57,6 +57,7 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
   const double dt = config_.physics.substep;
   simulator_.reset();
   HeadMotionEstimator head;
+  head.setTeleportLimits(options.teleport_distance, options.teleport_angle);
   head.reset(headPose(0.0, events_.sample(0.0, config_.physics.gravity)));
   std::vector<Vec3> world;
   RunSummary summary;
@@ -76,6 +77,10 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
       StepInputs in;
       const EventSample events = events_.sample(t, config_.physics.gravity);
       in.head = head.update(headPose(t, events), dt);
+      if (head.teleported()) {
+        simulator_.forgetBodyMotion();
+        ++summary.teleports;
+      }
       in.wind = scenario_.windVelocity(t) + events.wind;
       in.turbulence = &events.turbulence;
       in.gravity = &events.gravity;

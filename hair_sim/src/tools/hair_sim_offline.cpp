@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -43,6 +44,9 @@ const char* kUsage =
     "  --samples-across N  level of detail: mesh samples per B-spline span across a strip (default 2)\n"
     "  --samples-along N   level of detail: mesh samples per span along a strip (default 4)\n"
     "  --max-triangles N   choose the finest level of detail within N triangles instead\n"
+    "  --teleport-distance M, --teleport-angle RAD\n"
+    "                      a head jump beyond these within one substep is a teleport: the hair goes with\n"
+    "                      the head rigidly (default 0.5 m, 1.0 rad, as the node)\n"
     "  --help              this text\n"
     "\n"
     "A progress bar goes to stderr when it is a terminal and the run takes more than a second.\n"
@@ -90,7 +94,7 @@ int usageError(const std::string& message) {
 int main(int argc, char** argv) {
   std::string config_path, scenario_path, out_path, poses_path, mesh_dir, bag_path;
   hair_sim::RunOptions options;
-  std::string across, along, max_triangles;
+  std::string across, along, max_triangles, teleport_distance, teleport_angle;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto value = [&](std::string& target) {
@@ -119,6 +123,10 @@ int main(int argc, char** argv) {
       if (!value(along)) return usageError("--samples-along needs a number");
     } else if (arg == "--max-triangles") {
       if (!value(max_triangles)) return usageError("--max-triangles needs a number");
+    } else if (arg == "--teleport-distance") {
+      if (!value(teleport_distance)) return usageError("--teleport-distance needs a number");
+    } else if (arg == "--teleport-angle") {
+      if (!value(teleport_angle)) return usageError("--teleport-angle needs a number");
     } else {
       return usageError("unknown argument '" + arg + "'");
     }
@@ -152,6 +160,19 @@ int main(int argc, char** argv) {
       return usageError("--max-triangles: '" + max_triangles + "' is not a positive integer");
     options.mesh.max_triangles = number;
   }
+  auto positiveReal = [](const std::string& text, double& out) {
+    try {
+      std::size_t used = 0;
+      out = std::stod(text, &used);
+      return used == text.size() && std::isfinite(out) && out > 0.0;
+    } catch (const std::exception&) {
+      return false;
+    }
+  };
+  if (!teleport_distance.empty() && !positiveReal(teleport_distance, options.teleport_distance))
+    return usageError("--teleport-distance: '" + teleport_distance + "' is not a number > 0 (m)");
+  if (!teleport_angle.empty() && !positiveReal(teleport_angle, options.teleport_angle))
+    return usageError("--teleport-angle: '" + teleport_angle + "' is not a number > 0 (rad)");
   options.build_meshes = !mesh_dir.empty() || !bag_path.empty();
 
   try {

@@ -10,6 +10,7 @@
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,6 +44,11 @@ class HairSimNode {
   /// A head transform that jumps beyond the teleport limits from the previous one: the previous one is
   /// put in the buffer again just before it, so that the jump falls within one substep (a teleport).
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
+  /// Stamp order of a non-static transform against the newest one of its child frame: false (with a
+  /// throttled warning naming frame and stamps) for a repeated stamp or one older than the tf cache, which
+  /// tf2 would refuse with a TF_REPEATED_DATA or TF_OLD_DATA line on every message; older stamps within
+  /// the cache (out of order) are taken, counted and reported throttled.
+  bool acceptTfStamp(const geometry_msgs::TransformStamped& t, const std::string& authority);
   void onWind(const hair_sim_msgs::Wind::ConstPtr& msg);
   bool onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response);
   void onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg);
@@ -81,6 +87,7 @@ class HairSimNode {
   bool head_stale_ = false;
   double teleport_distance_ = 0.5, teleport_angle_ = 1.0;  ///< m, rad (between two head tf messages)
   geometry_msgs::TransformStamped last_head_tf_;           ///< the newest head transform received
+  std::map<std::string, ros::Time> newest_tf_stamp_;       ///< child frame -> newest stamp taken
   int strands_per_strip_ = 6;
 
   std::unique_ptr<Simulator> simulator_;

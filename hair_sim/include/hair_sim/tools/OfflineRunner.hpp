@@ -31,6 +31,7 @@ struct RunSummary {
   long mesh_vertices_projected = 0;  ///< mesh vertices moved out of a body, summed over the frames
   long mesh_triangles = 0;           ///< per frame (single-sided), when meshes are built
   bool all_finite = true;
+  long teleports = 0;  ///< substeps where the head jumped beyond RunOptions' teleport limits
 
   std::string toJson() const;
 };
@@ -48,6 +49,10 @@ struct OutputFrame {
 struct RunOptions {
   bool build_meshes = false;  ///< tessellate every output frame (for PLY output and mesh checks)
   HairMeshOptions mesh;
+  /// A head jump of more than this (m, rad) within one substep is a teleport: the hair goes with the head
+  /// rigidly (HeadMotionEstimator::setTeleportLimits); the node's ~teleport_distance, ~teleport_angle.
+  double teleport_distance = 0.5;
+  double teleport_angle = 1.0;
 };
 
 class OfflineRunner {

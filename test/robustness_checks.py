@@ -1,0 +1,306 @@
+#!/usr/bin/python3
+"""rostest node for robustness.test: bad input and faults sent to the real hair_sim_node (issue 8).
+
+The test broadcasts world -> head itself (upright head, TF_RATE Hz, stamped now) and, in this order on the
+same node, sends:
+
+  test_a_nan_tf            a head tf with translation.x = NaN, then one with rotation.w = inf
+  test_b_zero_quaternion   a head tf with the rotation quaternion (0, 0, 0, 0)
+  test_c_nonunit_quat      1 s of head tf with the quaternion (0, 0, 0, 2) (norm 2)
+  test_d_bad_wind          Wind with velocity.x = NaN, then a Wind in frame 'nowhere' (no tf)
+  test_e_tf_order          a head tf 0.2 s older than the newest (out of order), one 30 s older (beyond
+                           the tf cache), one repeating the newest stamp
+  test_f_stale_head        no head tf for STALE_PERIOD s (~max_tf_age is 0.5 s)
+  test_g_teleport          the head jumps 1.0 m sideways between two tf messages
+
+and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
+given with each case), hair_state keeps coming at publish_rate (at least 80 % of it, stale period included),
+every point of every hair_state is finite and within NEAR m of the head position (the hair is at most
+0.32 m long on a scalp of 0.115 m: 0.5 m is "near"), and the roots (row 0) stay on the head the test
+broadcast last as good (within ROOT_TOLERANCE: a bad pose must not have moved the head). For the teleport:
+the tips, in head coordinates, move less than TELEPORT_TIP_MOVE m from just before the jump to 0.2 s after
+it (the hair is carried rigidly; interpolated over one tf period instead, the head moves at 100 m/s and the
+tips swing by tens of cm), and the node logs the jump. At the end: no ERROR from the node on /rosout.
+
+Private parameters: node (/hair_sim), world_frame (world), head_frame (head), publish_rate (30).
+"""
+import math
+import sys
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import TransformStamped
+from hair_sim_msgs.msg import HairState, Wind
+from rosgraph_msgs.msg import Log
+from tf2_msgs.msg import TFMessage
+
+PKG = 'hair_sim'
+NAME = 'robustness_checks'
+
+TF_RATE = 100.0  # Hz
+HOME = (0.0, 0.0, 1.6)  # m: the head's rest place (the world bodies are placed for it)
+NEAR = 0.5  # m: every control point within this of the head's position
+ROOT_TOLERANCE = 0.002  # m: roots from the head position the test broadcast (scalp offsets aside, see roots)
+RATE_FRACTION = 0.8  # of publish_rate, over each case's watch window
+WATCH = 1.0  # s after each fault
+STALE_PERIOD = 2.0  # s without head tf
+TELEPORT = 1.0  # m, sideways (+y); the node's ~teleport_distance is 0.5 m
+TELEPORT_TIP_MOVE = 0.05  # m
+
+
+class RobustnessChecks(unittest.TestCase):
+    lock = threading.Lock()
+    states = []  # (receipt wall time, HairState)
+    logs = []  # (level, text) from the node
+    head = list(HOME)  # where the broadcaster puts the head
+    quaternion = (0.0, 0.0, 0.0, 1.0)
+    broadcasting = True
+    last_stamp = None  # newest head tf stamp sent
+    root_offsets = None  # roots in head coordinates, from the first states
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node(NAME)
+        cls.node = rospy.get_param('~node', '/hair_sim')
+        cls.world_frame = rospy.get_param('~world_frame', 'world')
+        cls.head_frame = rospy.get_param('~head_frame', 'head')
+        cls.publish_rate = float(rospy.get_param('~publish_rate', 30.0))
+        cls.tf_pub = rospy.Publisher('/tf', TFMessage, queue_size=100)
+        cls.wind_pub = rospy.Publisher('wind', Wind, queue_size=10)
+        rospy.Subscriber('hair_state', HairState, cls.on_state, queue_size=100)
+        rospy.Subscriber('/rosout', Log, cls.on_log, queue_size=1000)
+        cls.stop = threading.Event()
+        cls.thread = threading.Thread(target=cls.broadcast)
+        cls.thread.daemon = True
+        cls.thread.start()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.stop.set()
+
+    # -- rospy threads
+    @classmethod
+    def on_state(cls, msg):
+        with cls.lock:
+            cls.states.append((time.time(), msg))
+
+    @classmethod
+    def on_log(cls, msg):
+        if msg.name == cls.node:
+            with cls.lock:
+                cls.logs.append((msg.level, msg.msg))
+
+    @classmethod
+    def transform(cls, stamp, position, q):
+        t = TransformStamped()
+        t.header.stamp = stamp
+        t.header.frame_id = cls.world_frame
+        t.child_frame_id = cls.head_frame
+        t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = position
+        r = t.transform.rotation
+        r.x, r.y, r.z, r.w = q
+        return t
+
+    @classmethod
+    def broadcast(cls):
+        period = 1.0 / TF_RATE
+        while not cls.stop.is_set() and not rospy.is_shutdown():
+            with cls.lock:
+                go, position, q = cls.broadcasting, tuple(cls.head), cls.quaternion
+            if go:
+                cls.send(cls.transform(rospy.Time.now(), position, q))
+            time.sleep(period)
+
+    @classmethod
+    def send(cls, t):
+        with cls.lock:
+            if cls.last_stamp is None or t.header.stamp > cls.last_stamp:
+                cls.last_stamp = t.header.stamp
+        cls.tf_pub.publish(TFMessage(transforms=[t]))
+
+    # -- helpers (test thread)
+    def wait_for(self, predicate, timeout, what):
+        deadline = time.time() + timeout
+        while time.time() < deadline and not rospy.is_shutdown():
+            result = predicate()
+            if result:
+                return result
+            time.sleep(0.02)
+        self.fail('timed out after %.0f s waiting for %s' % (timeout, what))
+
+    def log_index(self):
+        with self.lock:
+            return len(self.logs)
+
+    def expect_log(self, since, text, level=Log.WARN, timeout=3.0):
+        """A node message at `level` containing `text` after log index `since`; returns it."""
+        def found():
+            with self.lock:
+                for lv, msg in self.logs[since:]:
+                    if lv == level and text in msg:
+                        return msg
+            return None
+        msg = self.wait_for(found, timeout, "a /rosout message of %s containing '%s'" % (self.node, text))
+        rospy.loginfo('%s: node said: %s', NAME, msg)
+        return msg
+
+    def watch(self, seconds, head):
+        """States received over the next `seconds`: count >= RATE_FRACTION of the rate, all sane."""
+        t0 = time.time()
+        time.sleep(seconds)
+        with self.lock:
+            window = [m for (w, m) in self.states if w > t0]
+        self.assertGreaterEqual(len(window), int(RATE_FRACTION * self.publish_rate * seconds),
+                                '%d hair_state in %.1f s (publish_rate %.0f Hz)' % (len(window), seconds,
+                                                                                    self.publish_rate))
+        for msg in window:
+            self.check_sane(msg, head)
+        return window
+
+    def check_sane(self, msg, head):
+        roots = []
+        for s, strip in enumerate(msg.strips):
+            for k, p in enumerate(strip.points):
+                v = (p.x, p.y, p.z)
+                self.assertTrue(all(map(math.isfinite, v)), 'strip %d point %d is %s' % (s, k, v))
+                d = math.sqrt(sum((a - b) ** 2 for a, b in zip(v, head)))
+                self.assertLess(d, NEAR, 'strip %d point %d is %.3f m from the head at %s' % (s, k, d, head))
+                if k < strip.columns:
+                    roots.append(tuple(a - b for a, b in zip(v, head)))
+        if self.root_offsets is None:
+            type(self).root_offsets = roots
+        worst = max(math.sqrt(sum((a - b) ** 2 for a, b in zip(r, o))) for r, o in zip(roots, self.root_offsets))
+        self.assertLess(worst, ROOT_TOLERANCE, 'roots moved %.4f m from the head at %s: the head was moved' %
+                        (worst, head))
+
+    def tips(self, msg, head):
+        out = []
+        for strip in msg.strips:
+            for c in range(strip.columns):
+                p = strip.points[(strip.rows - 1) * strip.columns + c]
+                out.append((p.x - head[0], p.y - head[1], p.z - head[2]))
+        return out
+
+    def now_stamp(self):
+        with self.lock:
+            last = self.last_stamp
+        now = rospy.Time.now()
+        return now if last is None or now > last else last + rospy.Duration(1e-4)
+
+    # -- the cases, in order
+    def test_0_starts(self):
+        self.wait_for(lambda: len(self.states) > 10, 30.0, 'hair_state (is hair_sim_node running?)')
+        time.sleep(1.0)  # the hair settles a little
+        self.watch(WATCH, HOME)
+
+    def test_a_nan_tf(self):
+        since = self.log_index()
+        self.send(self.transform(self.now_stamp(), (float('nan'), 0.0, 1.6), (0.0, 0.0, 0.0, 1.0)))
+        self.expect_log(since, 'transform.translation.x is nan')
+        self.watch(WATCH, HOME)
+        time.sleep(2.1)  # the warning is throttled to one per 2 s
+        since = self.log_index()
+        self.send(self.transform(self.now_stamp(), HOME, (0.0, 0.0, 0.0, float('inf'))))
+        self.expect_log(since, 'transform.rotation.w is inf')
+        self.watch(WATCH, HOME)
+
+    def test_b_zero_quaternion(self):
+        time.sleep(2.1)
+        since = self.log_index()
+        self.send(self.transform(self.now_stamp(), (0.3, 0.0, 1.6), (0.0, 0.0, 0.0, 0.0)))
+        self.expect_log(since, 'rotation is a zero quaternion')
+        self.watch(WATCH, HOME)
+
+    def test_c_nonunit_quaternion(self):
+        since = self.log_index()
+        with self.lock:
+            type(self).quaternion = (0.0, 0.0, 0.0, 2.0)
+        self.expect_log(since, 'rotation quaternion of norm 2 normalised')
+        self.watch(WATCH, HOME)
+        with self.lock:
+            type(self).quaternion = (0.0, 0.0, 0.0, 1.0)
+
+    def test_d_bad_wind(self):
+        since = self.log_index()
+        w = Wind()
+        w.header.frame_id = self.world_frame
+        w.velocity.x = float('nan')
+        self.wind_pub.publish(w)
+        self.expect_log(since, 'Wind message: velocity.x is nan')
+        self.watch(WATCH, HOME)
+        time.sleep(2.1)
+        since = self.log_index()
+        w = Wind()
+        w.header.frame_id = 'nowhere'
+        w.velocity.x = 2.0
+        self.wind_pub.publish(w)
+        self.expect_log(since, "header.frame_id 'nowhere' is unknown")
+        self.watch(WATCH, HOME)
+
+    def test_e_tf_order(self):
+        since = self.log_index()
+        newest = self.now_stamp()
+        self.send(self.transform(newest - rospy.Duration(0.2), HOME, (0.0, 0.0, 0.0, 1.0)))
+        self.expect_log(since, 'arrived out of order')
+        since = self.log_index()
+        self.send(self.transform(newest - rospy.Duration(30.0), (1.0, 0.0, 1.6), (0.0, 0.0, 0.0, 1.0)))
+        self.expect_log(since, 'beyond the 10.0 s tf cache')
+        since = self.log_index()
+        with self.lock:
+            repeat = self.last_stamp
+        self.send(self.transform(repeat, HOME, (0.0, 0.0, 0.0, 1.0)))
+        self.expect_log(since, 'repeats the previous one')
+        self.watch(WATCH, HOME)
+
+    def test_f_stale_head(self):
+        since = self.log_index()
+        with self.lock:
+            type(self).broadcasting = False
+        t0 = time.time()
+        self.expect_log(since, '(max_tf_age 0.50 s): holding the head')
+        stale = self.watch(STALE_PERIOD - (time.time() - t0), HOME)
+        rospy.loginfo('%s: %d hair_state while the head was stale', NAME, len(stale))
+        since = self.log_index()
+        with self.lock:
+            type(self).broadcasting = True
+        self.expect_log(since, 'fresh again', level=Log.INFO)
+        self.watch(WATCH, HOME)
+
+    def test_g_teleport(self):
+        time.sleep(1.0)
+        with self.lock:
+            before = self.states[-1][1]
+        since = self.log_index()
+        far = (HOME[0], HOME[1] + TELEPORT, HOME[2])
+        with self.lock:
+            type(self).head = list(far)
+        t0 = time.time()
+        time.sleep(0.2)
+        with self.lock:
+            after = [m for (w, m) in self.states if w > t0 - 0.2]
+        tips_before = self.tips(before, HOME)
+        worst = 0.0
+        for msg in after:
+            # States stamped before the jump still show the head at home: compare each with its own head.
+            root = msg.strips[0].points[0]
+            head = far if abs(root.y - HOME[1] - self.root_offsets[0][1]) > TELEPORT / 2 else HOME
+            tips = self.tips(msg, head)
+            worst = max(worst, max(math.sqrt(sum((a - b) ** 2 for a, b in zip(t, r)))
+                                   for t, r in zip(tips, tips_before)))
+        rospy.loginfo('%s: teleport of %.1f m: tips moved at most %.1f mm in head coordinates', NAME, TELEPORT,
+                      1e3 * worst)
+        self.assertLess(worst, TELEPORT_TIP_MOVE, 'tips moved %.3f m relative to the head over the teleport' % worst)
+        self.expect_log(since, 'the head jumped 1.000 m')
+        self.watch(WATCH, far)
+
+    def test_z_no_errors(self):
+        with self.lock:
+            errors = [m for (lv, m) in self.logs if lv >= Log.ERROR]
+        self.assertEqual(errors, [], 'the node logged errors: %s' % errors[:3])
+
+
+if __name__ == '__main__':
+    rostest.rosrun(PKG, NAME, RobustnessChecks, sys.argv)
