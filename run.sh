@@ -89,7 +89,7 @@ case "$cmd" in
     build
     seconds=${2:-60}
     # test/ is beside the package: rostest is told which package the test belongs to (as CTest does).
-    timeout $((2 * seconds + 180)) build/devel/env.sh rostest --pkgdir="$ROOT/hair_sim" --package=hair_sim --text \
+    timeout $((2 * seconds + 180)) build/devel/env.sh rostest --pkgdir="$ROOT/hair_sim" --package=hair_sim \
       "$ROOT/test/load.test" seconds:="$seconds" out:="$ROOT/build/load.json" && status=0 || status=$?
     cat build/load.json 2>/dev/null || echo "run.sh: no figures (build/load.json)" >&2
     exit $status

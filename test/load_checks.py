@@ -34,7 +34,7 @@ try:
 except ImportError:  # pragma: no cover
     from xmlrpclib import ServerProxy
 
-import rosnode
+import rosgraph
 import roslib.packages
 import rospy
 import rostest
@@ -122,12 +122,12 @@ class LoadChecks(unittest.TestCase):
         deadline = time.time() + 30.0
         while time.time() < deadline:
             try:
-                uri = rosnode.get_api_uri(rospy.get_master(), self.node)
+                uri = rosgraph.Master('/' + NAME).lookupNode(self.node)
                 if uri:
                     code, _, pid = ServerProxy(uri).getPid('/' + NAME)
                     if code == 1:
                         return int(pid)
-            except Exception:  # noqa: BLE001 (not up yet)
+            except (rosgraph.MasterError, IOError):  # not up yet
                 pass
             time.sleep(0.2)
         self.fail('%s did not register within 30 s' % self.node)

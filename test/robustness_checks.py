@@ -12,30 +12,44 @@ same node, sends:
                            the tf cache), one repeating the newest stamp
   test_f_stale_head        no head tf for STALE_PERIOD s (~max_tf_age is 0.5 s)
   test_g_teleport          the head jumps 1.0 m sideways between two tf messages
+  test_h_stall             the node's process stopped (SIGSTOP) for STALL s while tf goes on, then continued
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
 given with each case), hair_state keeps coming at publish_rate (at least 80 % of it, stale period included),
-every point of every hair_state is finite and within NEAR m of the head position (the hair is at most
+hair_state.step never goes back (the simulation is not restarted), every point of every hair_state is
+finite and within NEAR m of the head position (the hair is at most
 0.32 m long on a scalp of 0.115 m: 0.5 m is "near"), and the roots (row 0) stay on the head the test
 broadcast last as good (within ROOT_TOLERANCE: a bad pose must not have moved the head). For the teleport:
 the tips, in head coordinates, move less than TELEPORT_TIP_MOVE m from just before the jump to 0.2 s after
 it (the hair is carried rigidly; interpolated over one tf period instead, the head moves at 100 m/s and the
-tips swing by tens of cm), and the node logs the jump. At the end: no ERROR from the node on /rosout.
+tips swing by tens of cm), and the node logs the jump. For the stall: the node says it skipped ahead
+(max_substeps_per_update), that it buffered the queued tf without stepping for each (no burst of outputs),
+and from 0.5 s after it publishes at its rate again (no spiral of death): at least 80 % of publish_rate and
+at most STALL_RATE_MAX x publish_rate.
+At the end: no ERROR from the node on /rosout.
 
 Private parameters: node (/hair_sim), world_frame (world), head_frame (head), publish_rate (30).
 """
 import math
+import os
+import signal
 import sys
 import threading
 import time
 import unittest
 
+import rosgraph
 import rospy
 import rostest
 from geometry_msgs.msg import TransformStamped
 from hair_sim_msgs.msg import HairState, Wind
 from rosgraph_msgs.msg import Log
 from tf2_msgs.msg import TFMessage
+
+try:
+    from xmlrpc.client import ServerProxy
+except ImportError:  # pragma: no cover
+    from xmlrpclib import ServerProxy
 
 PKG = 'hair_sim'
 NAME = 'robustness_checks'
@@ -49,6 +63,8 @@ WATCH = 1.0  # s after each fault
 STALE_PERIOD = 2.0  # s without head tf
 TELEPORT = 1.0  # m, sideways (+y); the node's ~teleport_distance is 0.5 m
 TELEPORT_TIP_MOVE = 0.05  # m
+STALL = 3.0  # s: the node's process stopped
+STALL_RATE_MAX = 1.2  # x publish_rate after the stall (the tf backlog stepped one message at a time: 2.4 x)
 
 
 class RobustnessChecks(unittest.TestCase):
@@ -60,6 +76,7 @@ class RobustnessChecks(unittest.TestCase):
     broadcasting = True
     last_stamp = None  # newest head tf stamp sent
     root_offsets = None  # roots in head coordinates, from the first states
+    last_step = None  # hair_state.step of the last state watched
 
     @classmethod
     def setUpClass(cls):
@@ -158,6 +175,11 @@ class RobustnessChecks(unittest.TestCase):
                                                                                     self.publish_rate))
         for msg in window:
             self.check_sane(msg, head)
+            # The simulation goes on: its substep count never goes back (a reset would start it again).
+            if self.last_step is not None:
+                self.assertGreaterEqual(msg.step, self.last_step, 'hair_state.step went back from %d to %d: the '
+                                        'simulation was restarted' % (self.last_step, msg.step))
+            type(self).last_step = msg.step
         return window
 
     def check_sane(self, msg, head):
@@ -295,6 +317,34 @@ class RobustnessChecks(unittest.TestCase):
         self.assertLess(worst, TELEPORT_TIP_MOVE, 'tips moved %.3f m relative to the head over the teleport' % worst)
         self.expect_log(since, 'the head jumped 1.000 m')
         self.watch(WATCH, far)
+
+    def test_h_stall(self):
+        """The node's process stopped for STALL s (SIGSTOP) while tf goes on: on SIGCONT it catches up within
+        max_substeps_per_update substeps, says it skipped ahead, and publishes at its rate again."""
+        pid = self.node_pid()
+        head = tuple(self.head)
+        time.sleep(0.5)
+        since = self.log_index()
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            time.sleep(STALL)
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        resumed = time.time()
+        self.expect_log(since, 'skipping ahead (max_substeps_per_update 60)')
+        self.expect_log(since, 's old on arrival (max_tf_age 0.50 s): buffered without stepping')
+        time.sleep(max(0.0, resumed + 0.5 - time.time()))
+        window = self.watch(WATCH, head)
+        self.assertLessEqual(len(window), STALL_RATE_MAX * self.publish_rate * WATCH,
+                             '%d hair_state in the %.1f s from 0.5 s after the stall: a burst' % (len(window), WATCH))
+        rospy.loginfo('%s: after a %.1f s stall, %d hair_state in the %.1f s from 0.5 s after it', NAME, STALL,
+                      len(window), WATCH)
+
+    def node_pid(self):
+        uri = rosgraph.Master('/' + NAME).lookupNode(self.node)
+        code, _, pid = ServerProxy(uri).getPid('/' + NAME)
+        self.assertEqual(code, 1, 'getPid of %s failed' % self.node)
+        return int(pid)
 
     def test_z_no_errors(self):
         with self.lock:

@@ -324,6 +324,7 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
     last_tf_receipt_ = now;
   }
   const std::string& authority = event.getPublisherName();
+  ros::Time newest;  // newest stamp taken from this message
   for (const geometry_msgs::TransformStamped& t : event.getMessage()->transforms) {
     // A bad transform never enters the buffer (lookups would interpolate with it): the last good
     // one holds. A non-unit quaternion is normalised (tf2 would refuse it).
@@ -346,6 +347,7 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
                                   t.transform.rotation.w * t.transform.rotation.w));
     if (!is_static && !acceptTfStamp(fixed, authority)) continue;
     if (!is_static && fixed.child_frame_id == config_.head_frame) holdBeforeJump(fixed, authority);
+    if (fixed.header.stamp > newest) newest = fixed.header.stamp;
     try {
       tf_buffer_.setTransform(fixed, authority, is_static);
     } catch (const tf2::TransformException& e) {
@@ -353,7 +355,19 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
                         t.child_frame_id.c_str(), authority.c_str(), e.what());
     }
   }
-  if (!is_static) update(true);
+  if (is_static || newest.isZero()) return;
+  // Poses older than max_tf_age on arrival (the queue's backlog after the process stalled, or a late
+  // source) are buffered without stepping and publishing for each: the next fresh one steps through them
+  // all (within max_substeps_per_update), and the timer keeps the outputs going meanwhile.
+  const double late = (ros::Time::now() - newest).toSec();
+  if (late > max_tf_age_) {
+    ROS_WARN_THROTTLE(5.0,
+                      "hair_sim: tf from %s is %.3f s old on arrival (max_tf_age %.2f s): buffered without "
+                      "stepping (a backlog after a stall, or a late source)",
+                      authority.c_str(), late, max_tf_age_);
+    return;
+  }
+  update(true);
 }
 
 void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority) {
@@ -433,10 +447,12 @@ void HairSimNode::update(bool from_tf) {
     return;
   }
   diagnostics_->headPose(target);
-  if (!started_ || target + ros::Duration(1e-9) < sim_time_) {
+  // Time went backwards when the newest head pose is older than the one before (not than sim_time_, which
+  // runs ahead of it while a stale head is held).
+  if (!started_ || target + ros::Duration(1e-9) < newest_head_stamp_) {
     if (started_)
       ROS_WARN("hair_sim: time went backwards (%.3f -> %.3f): starting again from the rest shape",
-               sim_time_.toSec(), target.toSec());
+               newest_head_stamp_.toSec(), target.toSec());
     if (!lookupPose(config_.head_frame, target, latest_pose)) return;
     simulator_->reset();
     head_.reset(latest_pose);
@@ -450,6 +466,7 @@ void HairSimNode::update(bool from_tf) {
     ROS_INFO("hair_sim: following %s in %s from t = %.3f", config_.head_frame.c_str(),
              config_.world_frame.c_str(), target.toSec());
   }
+  newest_head_stamp_ = target;
   // A stale head pose (none newer than max_tf_age): the head is held where it was last seen and the hair
   // goes on moving, up to max_tf_age behind the clock (so that a pose coming in again is not taken for
   // time going backwards).
@@ -484,7 +501,15 @@ void HairSimNode::update(bool from_tf) {
       sim_time_ = t;
       ++held_steps;
     }
-    if (sim_time_ + ros::Duration(dt) <= hold_until) sim_time_ = hold_until;  // a long stall: skip ahead
+    if (sim_time_ + ros::Duration(dt) <= hold_until) {  // a long stall: skip ahead
+      ROS_WARN_THROTTLE(5.0,
+                        "hair_sim: %.3f s behind the clock with the head held; skipping ahead "
+                        "(max_substeps_per_update %d)",
+                        (hold_until - sim_time_).toSec(), max_substeps_per_update_);
+      diagnostics_->droppedInput("stale head: skipped " + formatDouble((hold_until - sim_time_).toSec()) +
+                                 " s (max_substeps_per_update)");
+      sim_time_ = hold_until;
+    }
     status_steps_ += held_steps;
     target = sim_time_;
     latest_pose = held;

@@ -85,6 +85,7 @@ class HairSimNode {
   int max_substeps_per_update_ = 60;
   double max_tf_age_ = 0.5;  ///< s: a newer head pose than this is expected; older = stale
   bool head_stale_ = false;
+  ros::Time newest_head_stamp_;  ///< stamp of the newest head pose at the last update (time going back)
   double teleport_distance_ = 0.5, teleport_angle_ = 1.0;  ///< m, rad (between two head tf messages)
   geometry_msgs::TransformStamped last_head_tf_;           ///< the newest head transform received
   std::map<std::string, ros::Time> newest_tf_stamp_;       ///< child frame -> newest stamp taken
