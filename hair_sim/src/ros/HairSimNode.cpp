@@ -187,7 +187,7 @@ Vec3 HairSimNode::windAt(double t) const {
 void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
   const std::string problem = checkWind(*msg);
   if (!problem.empty()) {
-    ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a Wind message: %s; the last good wind holds", problem.c_str());
+    warnThrottled("wind", "hair_sim: ignored a Wind message: " + problem + "; the last good wind holds");
     diagnostics_->droppedInput("wind: " + problem);
     return;
   }
@@ -197,10 +197,9 @@ void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
   if (!frame.empty() && frame != config_.world_frame) {
     Iso3 pose;
     if (!lookupPose(frame, ros::Time(0), pose)) {
-      ROS_WARN_THROTTLE(2.0,
-                        "hair_sim: ignored a Wind message: header.frame_id '%s' is unknown (no tf to '%s'); "
-                        "the last good wind holds",
-                        frame.c_str(), config_.world_frame.c_str());
+      warnThrottled("wind", "hair_sim: ignored a Wind message: header.frame_id '" + frame +
+                                "' is unknown (no tf to '" + config_.world_frame +
+                                "'); the last good wind holds");
       diagnostics_->droppedInput("wind: no tf from '" + frame + "'");
       return;
     }
@@ -252,7 +251,7 @@ void HairSimNode::onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg) {
   }
   EventType type;
   if (parseEventType(msg->type, &type) && isHeadMotion(type)) return;  // the head driver's
-  ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a HairEvent (%s): %s", msg->type.c_str(), message.c_str());
+  warnThrottled("event", "hair_sim: ignored a HairEvent (" + msg->type + "): " + message);
 }
 
 bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
@@ -329,9 +328,8 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
     bool normalised = false;
     const std::string problem = checkTransform(t, &fixed, &normalised);
     if (!problem.empty()) {
-      ROS_WARN_THROTTLE(2.0, "hair_sim: ignored tf %s -> %s from %s: transform.%s; the last good pose holds",
-                        t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(),
-                        problem.c_str());
+      warnThrottled("tf", "hair_sim: ignored tf " + t.header.frame_id + " -> " + t.child_frame_id + " from " +
+                              authority + ": transform." + problem + "; the last good pose holds");
       diagnostics_->droppedInput("tf " + t.child_frame_id + ": transform." + problem);
       continue;
     }
@@ -371,6 +369,15 @@ void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const
     tf_buffer_.setTransform(hold, authority, false);
   } catch (const tf2::TransformException&) {
   }
+}
+
+void HairSimNode::warnThrottled(const std::string& what, const std::string& text) {
+  const ros::WallTime now = ros::WallTime::now();
+  auto it = last_warning_.find(what);
+  if (it != last_warning_.end() && it->second.second == text && (now - it->second.first).toSec() < 2.0)
+    return;
+  last_warning_[what] = {now, text};
+  ROS_WARN("%s", text.c_str());
 }
 
 void HairSimNode::onTimer(const ros::TimerEvent&) {
@@ -427,6 +434,7 @@ void HairSimNode::update(bool from_tf) {
     const ros::Time hold_until = clock - ros::Duration(max_tf_age_);
     const Iso3 held = head_.state().pose;
     int held_steps = 0;
+    const ros::WallTime held_start = ros::WallTime::now();
     while (sim_time_ + ros::Duration(dt) <= hold_until && held_steps < max_substeps_per_update_) {
       const ros::Time t = sim_time_ + ros::Duration(dt);
       StepInputs in;
@@ -442,6 +450,7 @@ void HairSimNode::update(bool from_tf) {
     }
     if (sim_time_ + ros::Duration(dt) <= hold_until) sim_time_ = hold_until;  // a long stall: skip ahead
     status_steps_ += held_steps;
+    diagnostics_->addSubsteps(held_steps, (ros::WallTime::now() - held_start).toSec());
     target = sim_time_;
     latest_pose = held;
   }

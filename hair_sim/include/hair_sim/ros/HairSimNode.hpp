@@ -10,6 +10,7 @@
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,9 @@ class HairSimNode {
   void update(bool from_tf);
   /// A head transform that jumps beyond the teleport limits from the previous one: the previous one is
   /// put in the buffer again just before it, so that the jump falls within one substep (a teleport).
+  /// A warning about `what` (tf, wind, event): said at once when it differs from the last one about it,
+  /// else at most every 2 s (a stream of the same bad input does not flood the log).
+  void warnThrottled(const std::string& what, const std::string& text);
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
   void onWind(const hair_sim_msgs::Wind::ConstPtr& msg);
   bool onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response);
@@ -80,7 +84,8 @@ class HairSimNode {
   double max_tf_age_ = 0.5;  ///< s: a newer head pose than this is expected; older = stale
   bool head_stale_ = false;
   double teleport_distance_ = 0.5, teleport_angle_ = 1.0;  ///< m, rad (between two head tf messages)
-  geometry_msgs::TransformStamped last_head_tf_;           ///< the newest head transform received
+  std::map<std::string, std::pair<ros::WallTime, std::string>> last_warning_;  ///< warnThrottled
+  geometry_msgs::TransformStamped last_head_tf_;  ///< the newest head transform received
   int strands_per_strip_ = 6;
 
   std::unique_ptr<Simulator> simulator_;
