@@ -6,12 +6,12 @@ same node, sends:
 
   test_a_nan_tf            a head tf with translation.x = NaN, then one with rotation.w = inf
   test_b_zero_quaternion   a head tf with the rotation quaternion (0, 0, 0, 0)
-  test_c_nonunit_quat      1 s of head tf with the quaternion (0, 0, 0, 2) (norm 2)
+  test_c_nonunit_quat      1 s of head tf with a quaternion of norm 2 turning the head 0.5 rad (yaw)
   test_d_bad_wind          Wind with velocity.x = NaN, then a Wind in frame 'nowhere' (no tf)
   test_e_tf_order          a head tf 0.2 s older than the newest (out of order), one 30 s older (beyond
                            the tf cache), one repeating the newest stamp
   test_f_stale_head        no head tf for STALE_PERIOD s (~max_tf_age is 0.5 s)
-  test_g_teleport          the head jumps 1.0 m sideways between two tf messages
+  test_g_teleport          the head jumps 1.0 m sideways and turns 2 rad between two tf messages
   test_h_stall             the node's process stopped (SIGSTOP) for STALL s while tf goes on, then continued
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
@@ -19,7 +19,8 @@ given with each case), hair_state keeps coming at publish_rate (at least 80 % of
 hair_state.step never goes back (the simulation is not restarted), every point of every hair_state is
 finite and within NEAR m of the head position (the hair is at most
 0.32 m long on a scalp of 0.115 m: 0.5 m is "near"), and the roots (row 0) stay on the head the test
-broadcast last as good (within ROOT_TOLERANCE: a bad pose must not have moved the head). For the teleport:
+broadcast last as good, turned as it was (within ROOT_TOLERANCE: a bad pose must not have moved the head,
+a normalised one must have turned it). For the teleport:
 the tips, in head coordinates, move less than TELEPORT_TIP_MOVE m from just before the jump to 0.2 s after
 it (the hair is carried rigidly; interpolated over one tf period instead, the head moves at 100 m/s and the
 tips swing by tens of cm), and the node logs the jump. For the stall: the node says it skipped ahead
@@ -56,6 +57,8 @@ NAME = 'robustness_checks'
 
 TF_RATE = 100.0  # Hz
 HOME = (0.0, 0.0, 1.6)  # m: the head's rest place (the world bodies are placed for it)
+NONUNIT_YAW = 0.5  # rad: the turn given by the non-unit quaternion
+TELEPORT_YAW = 2.0  # rad, with the teleport (the node's ~teleport_angle is 1.0 rad)
 NEAR = 0.5  # m: every control point within this of the head's position
 ROOT_TOLERANCE = 0.002  # m: roots from the head position the test broadcast (scalp offsets aside, see roots)
 RATE_FRACTION = 0.8  # of publish_rate, over each case's watch window
@@ -65,6 +68,15 @@ TELEPORT = 1.0  # m, sideways (+y); the node's ~teleport_distance is 0.5 m
 TELEPORT_TIP_MOVE = 0.05  # m
 STALL = 3.0  # s: the node's process stopped
 STALL_RATE_MAX = 1.2  # x publish_rate after the stall (the tf backlog stepped one message at a time: 2.4 x)
+
+
+def quat_yaw(yaw):
+    return (0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
+
+
+def rotate_yaw(p, yaw):
+    c, s = math.cos(yaw), math.sin(yaw)
+    return (c * p[0] - s * p[1], s * p[0] + c * p[1], p[2])
 
 
 class RobustnessChecks(unittest.TestCase):
@@ -164,7 +176,7 @@ class RobustnessChecks(unittest.TestCase):
         rospy.loginfo('%s: node said: %s', NAME, msg)
         return msg
 
-    def watch(self, seconds, head):
+    def watch(self, seconds, head, yaw=0.0):
         """States received over the next `seconds`: count >= RATE_FRACTION of the rate, all sane."""
         t0 = time.time()
         time.sleep(seconds)
@@ -174,7 +186,7 @@ class RobustnessChecks(unittest.TestCase):
                                 '%d hair_state in %.1f s (publish_rate %.0f Hz)' % (len(window), seconds,
                                                                                     self.publish_rate))
         for msg in window:
-            self.check_sane(msg, head)
+            self.check_sane(msg, head, yaw)
             # The simulation goes on: its substep count never goes back (a reset would start it again).
             if self.last_step is not None:
                 self.assertGreaterEqual(msg.step, self.last_step, 'hair_state.step went back from %d to %d: the '
@@ -182,7 +194,8 @@ class RobustnessChecks(unittest.TestCase):
             type(self).last_step = msg.step
         return window
 
-    def check_sane(self, msg, head):
+    def check_sane(self, msg, head, yaw=0.0):
+        """Finite, near the head, roots where the head at `head` turned by `yaw` puts them."""
         roots = []
         for s, strip in enumerate(msg.strips):
             for k, p in enumerate(strip.points):
@@ -194,16 +207,18 @@ class RobustnessChecks(unittest.TestCase):
                     roots.append(tuple(a - b for a, b in zip(v, head)))
         if self.root_offsets is None:
             type(self).root_offsets = roots
-        worst = max(math.sqrt(sum((a - b) ** 2 for a, b in zip(r, o))) for r, o in zip(roots, self.root_offsets))
+        worst = max(math.sqrt(sum((a - b) ** 2 for a, b in zip(r, rotate_yaw(o, yaw))))
+                    for r, o in zip(roots, self.root_offsets))
         self.assertLess(worst, ROOT_TOLERANCE, 'roots moved %.4f m from the head at %s: the head was moved' %
                         (worst, head))
 
-    def tips(self, msg, head):
+    def tips(self, msg, head, yaw=0.0):
+        """Tips in the coordinates of the head at `head` turned by `yaw`."""
         out = []
         for strip in msg.strips:
             for c in range(strip.columns):
                 p = strip.points[(strip.rows - 1) * strip.columns + c]
-                out.append((p.x - head[0], p.y - head[1], p.z - head[2]))
+                out.append(rotate_yaw((p.x - head[0], p.y - head[1], p.z - head[2]), -yaw))
         return out
 
     def now_stamp(self):
@@ -238,12 +253,15 @@ class RobustnessChecks(unittest.TestCase):
 
     def test_c_nonunit_quaternion(self):
         since = self.log_index()
+        # Norm 2 and a turn: taken normalised, the hair turns with the head (the roots show it).
         with self.lock:
-            type(self).quaternion = (0.0, 0.0, 0.0, 2.0)
+            type(self).quaternion = tuple(2.0 * v for v in quat_yaw(NONUNIT_YAW))
         self.expect_log(since, 'rotation quaternion of norm 2 normalised')
-        self.watch(WATCH, HOME)
+        time.sleep(0.1)
+        self.watch(WATCH, HOME, NONUNIT_YAW)
         with self.lock:
             type(self).quaternion = (0.0, 0.0, 0.0, 1.0)
+        time.sleep(1.0)
 
     def test_d_bad_wind(self):
         since = self.log_index()
@@ -299,6 +317,7 @@ class RobustnessChecks(unittest.TestCase):
         far = (HOME[0], HOME[1] + TELEPORT, HOME[2])
         with self.lock:
             type(self).head = list(far)
+            type(self).quaternion = quat_yaw(TELEPORT_YAW)
         t0 = time.time()
         time.sleep(0.2)
         with self.lock:
@@ -308,21 +327,21 @@ class RobustnessChecks(unittest.TestCase):
         for msg in after:
             # States stamped before the jump still show the head at home: compare each with its own head.
             root = msg.strips[0].points[0]
-            head = far if abs(root.y - HOME[1] - self.root_offsets[0][1]) > TELEPORT / 2 else HOME
-            tips = self.tips(msg, head)
+            jumped = abs(root.y - HOME[1] - self.root_offsets[0][1]) > TELEPORT / 2
+            tips = self.tips(msg, far, TELEPORT_YAW) if jumped else self.tips(msg, HOME)
             worst = max(worst, max(math.sqrt(sum((a - b) ** 2 for a, b in zip(t, r)))
                                    for t, r in zip(tips, tips_before)))
         rospy.loginfo('%s: teleport of %.1f m: tips moved at most %.1f mm in head coordinates', NAME, TELEPORT,
                       1e3 * worst)
         self.assertLess(worst, TELEPORT_TIP_MOVE, 'tips moved %.3f m relative to the head over the teleport' % worst)
-        self.expect_log(since, 'the head jumped 1.000 m')
-        self.watch(WATCH, far)
+        self.expect_log(since, 'the head jumped 1.000 m and 2.000 rad')
+        self.watch(WATCH, far, TELEPORT_YAW)
 
     def test_h_stall(self):
         """The node's process stopped for STALL s (SIGSTOP) while tf goes on: on SIGCONT it catches up within
         max_substeps_per_update substeps, says it skipped ahead, and publishes at its rate again."""
         pid = self.node_pid()
-        head = tuple(self.head)
+        head = tuple(self.head)  # where test_g left it, turned by TELEPORT_YAW
         time.sleep(0.5)
         since = self.log_index()
         os.kill(pid, signal.SIGSTOP)
@@ -334,7 +353,7 @@ class RobustnessChecks(unittest.TestCase):
         self.expect_log(since, 'skipping ahead (max_substeps_per_update 60)')
         self.expect_log(since, 's old on arrival (max_tf_age 0.50 s): buffered without stepping')
         time.sleep(max(0.0, resumed + 0.5 - time.time()))
-        window = self.watch(WATCH, head)
+        window = self.watch(WATCH, head, TELEPORT_YAW)
         self.assertLessEqual(len(window), STALL_RATE_MAX * self.publish_rate * WATCH,
                              '%d hair_state in the %.1f s from 0.5 s after the stall: a burst' % (len(window), WATCH))
         rospy.loginfo('%s: after a %.1f s stall, %d hair_state in the %.1f s from 0.5 s after it', NAME, STALL,

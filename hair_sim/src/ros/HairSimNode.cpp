@@ -8,6 +8,7 @@
 #include <boost/make_shared.hpp>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/util/YamlReader.hpp"
@@ -19,6 +20,29 @@ namespace {
 
 std::invalid_argument badParam(const std::string& name, const std::string& value, const std::string& rule) {
   return std::invalid_argument("parameter ~" + name + ": '" + value + "' " + rule);
+}
+
+const char* typeName(const std::string*) { return "a string"; }
+const char* typeName(const int*) { return "an integer"; }
+const char* typeName(const double*) { return "a number"; }
+
+/// Private parameter `name` into `value` if it is set (returns whether it was); set with the wrong type
+/// (e.g. _publish_rate:=fast), it stops the start with the parameter and the value named, rather than
+/// being ignored.
+template <typename T>
+bool readParam(const ros::NodeHandle& nh, const std::string& name, T& value) {
+  if (!nh.hasParam(name)) return false;
+  XmlRpc::XmlRpcValue raw;
+  nh.getParam(name, raw);
+  // roscpp would round 2.5 to an integer 3: integers must be given as integers.
+  const bool integer_wanted = std::is_same<T, int>::value;
+  if (!(integer_wanted && raw.getType() != XmlRpc::XmlRpcValue::TypeInt) && nh.getParam(name, value))
+    return true;
+  std::string shown = raw.toXml();
+  if (raw.getType() == XmlRpc::XmlRpcValue::TypeString) shown = static_cast<std::string>(raw);
+  if (raw.getType() == XmlRpc::XmlRpcValue::TypeDouble) shown = formatDouble(static_cast<double>(raw));
+  if (raw.getType() == XmlRpc::XmlRpcValue::TypeBoolean) shown = static_cast<bool>(raw) ? "true" : "false";
+  throw badParam(name, shown, std::string("must be ") + typeName(&value));
 }
 
 }  // namespace
@@ -62,17 +86,17 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(n
 }
 
 void HairSimNode::readParameters() {
-  if (!pnh_.getParam("config_file", config_file_) || config_file_.empty())
+  if (!readParam(pnh_, "config_file", config_file_) || config_file_.empty())
     throw badParam("config_file", config_file_, "is required: the path of config/hair_sim.yaml");
   config_ = loadSimConfig(config_file_);  // names file, key, line and value on error
   const std::string file_world_frame = config_.world_frame, file_head_frame = config_.head_frame;
   // Individual parameters override the file (launch file arguments).
   std::string frame;
-  if (pnh_.getParam("world_frame", frame)) {
+  if (readParam(pnh_, "world_frame", frame)) {
     if (!isValidFrameName(frame)) throw badParam("world_frame", frame, "is not a valid tf frame name");
     config_.world_frame = frame;
   }
-  if (pnh_.getParam("head_frame", frame)) {
+  if (readParam(pnh_, "head_frame", frame)) {
     if (!isValidFrameName(frame)) throw badParam("head_frame", frame, "is not a valid tf frame name");
     config_.head_frame = frame;
   }
@@ -86,13 +110,13 @@ void HairSimNode::readParameters() {
       body.frame = config_.head_frame;
   }
   double rate = 0.0;
-  if (pnh_.getParam("publish_rate", rate)) {
+  if (readParam(pnh_, "publish_rate", rate)) {
     if (!(std::isfinite(rate) && rate > 0.0 && rate <= 1.0 / config_.physics.substep))
       throw badParam("publish_rate", formatDouble(rate), "must be in (0, 1/substep] Hz");
     config_.publish_rate = rate;
   }
   std::string mode = "mesh";
-  pnh_.getParam("render_mode", mode);
+  readParam(pnh_, "render_mode", mode);
   if (mode == "mesh")
     render_mode_ = RenderMode::Mesh;
   else if (mode == "strands")
@@ -102,26 +126,26 @@ void HairSimNode::readParameters() {
   else
     throw badParam("render_mode", mode, "must be mesh, strands or both");
   int across = 2, along = 4, max_triangles = 0;
-  pnh_.getParam("samples_across", across);
-  pnh_.getParam("samples_along", along);
-  pnh_.getParam("max_triangles", max_triangles);
+  readParam(pnh_, "samples_across", across);
+  readParam(pnh_, "samples_along", along);
+  readParam(pnh_, "max_triangles", max_triangles);
   if (across < 1 || across > 64) throw badParam("samples_across", std::to_string(across), "must be in 1..64");
   if (along < 1 || along > 64) throw badParam("samples_along", std::to_string(along), "must be in 1..64");
   if (max_triangles < 0)
     throw badParam("max_triangles", std::to_string(max_triangles), "must be >= 0 (0 = off)");
   mesh_options_.level_of_detail = LevelOfDetail{across, along};
   mesh_options_.max_triangles = max_triangles;
-  pnh_.getParam("max_substeps_per_update", max_substeps_per_update_);
+  readParam(pnh_, "max_substeps_per_update", max_substeps_per_update_);
   if (max_substeps_per_update_ < 1)
     throw badParam("max_substeps_per_update", std::to_string(max_substeps_per_update_), "must be >= 1");
   double smoothing = 0.02;
-  pnh_.getParam("head_smoothing", smoothing);
+  readParam(pnh_, "head_smoothing", smoothing);
   if (!(std::isfinite(smoothing) && smoothing >= 0.0 && smoothing <= 1.0))
     throw badParam("head_smoothing", formatDouble(smoothing), "must be in [0, 1] s");
   head_ = HeadMotionEstimator(smoothing);
   double teleport_distance = 0.5, teleport_angle = 1.0;
-  pnh_.getParam("teleport_distance", teleport_distance);
-  pnh_.getParam("teleport_angle", teleport_angle);
+  readParam(pnh_, "teleport_distance", teleport_distance);
+  readParam(pnh_, "teleport_angle", teleport_angle);
   if (!(std::isfinite(teleport_distance) && teleport_distance > 0.0))
     throw badParam("teleport_distance", formatDouble(teleport_distance), "must be > 0 m");
   if (!(std::isfinite(teleport_angle) && teleport_angle > 0.0))
@@ -129,13 +153,13 @@ void HairSimNode::readParameters() {
   head_.setTeleportLimits(teleport_distance, teleport_angle);
   teleport_distance_ = teleport_distance;
   teleport_angle_ = teleport_angle;
-  pnh_.getParam("max_tf_age", max_tf_age_);
+  readParam(pnh_, "max_tf_age", max_tf_age_);
   if (!(std::isfinite(max_tf_age_) && max_tf_age_ > 0.0))
     throw badParam("max_tf_age", formatDouble(max_tf_age_), "must be > 0 s");
-  pnh_.getParam("strands_per_strip", strands_per_strip_);
+  readParam(pnh_, "strands_per_strip", strands_per_strip_);
   if (strands_per_strip_ < 1)
     throw badParam("strands_per_strip", std::to_string(strands_per_strip_), "must be >= 1");
-  pnh_.getParam("wind_scale", wind_scale_);
+  readParam(pnh_, "wind_scale", wind_scale_);
   if (!(std::isfinite(wind_scale_) && wind_scale_ >= 0.0 && wind_scale_ <= 100.0))
     throw badParam("wind_scale", formatDouble(wind_scale_), "must be in [0, 100]");
 }
@@ -187,7 +211,7 @@ Vec3 HairSimNode::windAt(double t) const {
 void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
   const std::string problem = checkWind(*msg);
   if (!problem.empty()) {
-    ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a Wind message: %s; the last good wind holds", problem.c_str());
+    warnThrottled("wind", "hair_sim: ignored a Wind message: " + problem + "; the last good wind holds");
     diagnostics_->droppedInput("wind: " + problem);
     return;
   }
@@ -197,10 +221,9 @@ void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
   if (!frame.empty() && frame != config_.world_frame) {
     Iso3 pose;
     if (!lookupPose(frame, ros::Time(0), pose)) {
-      ROS_WARN_THROTTLE(2.0,
-                        "hair_sim: ignored a Wind message: header.frame_id '%s' is unknown (no tf to '%s'); "
-                        "the last good wind holds",
-                        frame.c_str(), config_.world_frame.c_str());
+      warnThrottled("wind", "hair_sim: ignored a Wind message: header.frame_id '" + frame +
+                                "' is unknown (no tf to '" + config_.world_frame +
+                                "'); the last good wind holds");
       diagnostics_->droppedInput("wind: no tf from '" + frame + "'");
       return;
     }
@@ -252,7 +275,7 @@ void HairSimNode::onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg) {
   }
   EventType type;
   if (parseEventType(msg->type, &type) && isHeadMotion(type)) return;  // the head driver's
-  ROS_WARN_THROTTLE(2.0, "hair_sim: ignored a HairEvent (%s): %s", msg->type.c_str(), message.c_str());
+  warnThrottled("event", "hair_sim: ignored a HairEvent (" + msg->type + "): " + message);
 }
 
 bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
@@ -332,9 +355,8 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
     bool normalised = false;
     const std::string problem = checkTransform(t, &fixed, &normalised);
     if (!problem.empty()) {
-      ROS_WARN_THROTTLE(2.0, "hair_sim: ignored tf %s -> %s from %s: transform.%s; the last good pose holds",
-                        t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(),
-                        problem.c_str());
+      warnThrottled("tf", "hair_sim: ignored tf " + t.header.frame_id + " -> " + t.child_frame_id + " from " +
+                              authority + ": transform." + problem + "; the last good pose holds");
       diagnostics_->droppedInput("tf " + t.child_frame_id + ": transform." + problem);
       continue;
     }
@@ -431,6 +453,15 @@ bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const 
   return true;
 }
 
+void HairSimNode::warnThrottled(const std::string& what, const std::string& text) {
+  const ros::WallTime now = ros::WallTime::now();
+  auto it = last_warning_.find(what);
+  if (it != last_warning_.end() && it->second.second == text && (now - it->second.first).toSec() < 2.0)
+    return;
+  last_warning_[what] = {now, text};
+  ROS_WARN("%s", text.c_str());
+}
+
 void HairSimNode::onTimer(const ros::TimerEvent&) {
   // A fallback while no tf comes in (the hair still settles and is published at publish_rate).
   if ((ros::WallTime::now() - last_tf_publish_).toSec() < 1.5 / config_.publish_rate) return;
@@ -488,6 +519,7 @@ void HairSimNode::update(bool from_tf) {
     const ros::Time hold_until = clock - ros::Duration(max_tf_age_);
     const Iso3 held = head_.state().pose;
     int held_steps = 0;
+    const ros::WallTime held_start = ros::WallTime::now();
     while (sim_time_ + ros::Duration(dt) <= hold_until && held_steps < max_substeps_per_update_) {
       const ros::Time t = sim_time_ + ros::Duration(dt);
       StepInputs in;
@@ -511,6 +543,7 @@ void HairSimNode::update(bool from_tf) {
       sim_time_ = hold_until;
     }
     status_steps_ += held_steps;
+    diagnostics_->addSubsteps(held_steps, (ros::WallTime::now() - held_start).toSec());
     target = sim_time_;
     latest_pose = held;
   }

@@ -41,6 +41,9 @@ class HairSimNode {
   /// Steps to the newest head pose and publishes if due (from_tf) or always (the timer, which only
   /// acts while no tf has come in for 1.5 output periods).
   void update(bool from_tf);
+  /// A warning about `what` (tf, wind, event): said at once when it differs from the last one about it,
+  /// else at most every 2 s (a stream of the same bad input does not flood the log).
+  void warnThrottled(const std::string& what, const std::string& text);
   /// A head transform that jumps beyond the teleport limits from the previous one: the previous one is
   /// put in the buffer again just before it, so that the jump falls within one substep (a teleport).
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
@@ -87,8 +90,9 @@ class HairSimNode {
   bool head_stale_ = false;
   ros::Time newest_head_stamp_;  ///< stamp of the newest head pose at the last update (time going back)
   double teleport_distance_ = 0.5, teleport_angle_ = 1.0;  ///< m, rad (between two head tf messages)
-  geometry_msgs::TransformStamped last_head_tf_;           ///< the newest head transform received
-  std::map<std::string, ros::Time> newest_tf_stamp_;       ///< child frame -> newest stamp taken
+  std::map<std::string, std::pair<ros::WallTime, std::string>> last_warning_;  ///< warnThrottled
+  geometry_msgs::TransformStamped last_head_tf_;      ///< the newest head transform received
+  std::map<std::string, ros::Time> newest_tf_stamp_;  ///< child frame -> newest stamp taken
   int strands_per_strip_ = 6;
 
   std::unique_ptr<Simulator> simulator_;
