@@ -13,6 +13,7 @@
 #include "hair_sim/core/dynamics/HeadState.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
+#include "hair_sim/core/util/YamlReader.hpp"
 #include "hair_sim/tools/OfflineRunner.hpp"
 
 namespace hair_sim {
@@ -97,6 +98,8 @@ TEST(RobustnessTest, ExtremeWindAndHeadSpinStayFiniteKeepLengthsAndStayOutOfBodi
     worst_depth = std::max(worst_depth, deepest(sim, config, pose));
     worst_reported = std::max(worst_reported, sim.maxPenetration());
   }
+  RecordProperty("max_length_error_relative", formatDouble(worst_length));
+  RecordProperty("max_penetration_m", formatDouble(worst_depth));
   EXPECT_LT(worst_length, 1e-9);
   EXPECT_LE(worst_depth, 1e-9);
   EXPECT_LE(worst_reported, 1e-9);
@@ -212,7 +215,7 @@ TEST(RobustnessTest, TeleportOntoTheWorldBodiesLeavesNoPointInside) {
     if (i > 120) worst_after = std::max(worst_after, deepest(sim, config, pose));
   }
   EXPECT_EQ(teleports, 1);
-  RecordProperty("depth_before_projection_mm", std::to_string(1e3 * depth_before_step));
+  RecordProperty("depth_before_projection_mm", formatDouble(1e3 * depth_before_step));
   EXPECT_GT(depth_before_step, 0.005) << "the test's premise: carried rigidly, hair lands inside a body";
   EXPECT_LE(worst_after, 1e-9);
   EXPECT_LT(worst_length, 1e-9);
@@ -247,6 +250,8 @@ TEST(RobustnessTest, OfflineRunnerCountsTeleportsAndKeepsTheHairSane) {
   // Without a teleport limit the 0.6 m jump is a 150 m/s head: the hair whips (the check can fail).
   const RunSummary whipped = run(1e9);
   EXPECT_EQ(whipped.teleports, 0);
+  RecordProperty("max_segment_rate_teleport", formatDouble(limited.max_segment_rate));
+  RecordProperty("max_segment_rate_no_limit", formatDouble(whipped.max_segment_rate));
   EXPECT_GT(whipped.max_segment_rate, 2.0 * limited.max_segment_rate);
   RunOptions bad;
   bad.teleport_angle = -1.0;
