@@ -448,9 +448,9 @@ bool Simulator::clearOf(std::size_t b, double d, const Vec3& u, const std::vecto
   if (!is_near_[b]) return true;
   const Vec3 q_end = q_pivot_[b] + d * (now[b].Sinv() * u);
   if (q_end.squaredNorm() - 1.0 <= 1e-12) return false;
-  if (pivot_inside_[b]) return true;  // a root inside its inflated scalp: only the end point counts
+  if (pivot_inside_[b] || clear_level_ >= 2) return true;      // a root inside its scalp: only the end counts
   if (pathEntersUnitSphere(q_pivot_[b], q_end)) return false;  // the segment cuts through
-  if (have_before && pathEntersUnitSphere(q_prev_[b], q_end)) return false;
+  if (have_before && clear_level_ == 0 && pathEntersUnitSphere(q_prev_[b], q_end)) return false;
   return true;
 }
 
@@ -468,6 +468,12 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
   if (!validBodies(dir)) {
     ++collisions_;
     result = escapeBodies(pivot, d, dir, validFor, validBodies, now);
+    // No direction passes every test (a crevice between bodies moving fast, where every end's path over
+    // the substep crosses one): the end outside every body comes first, so the swept test goes, then the
+    // segment test (the hard guarantee is on where the points are after the substep).
+    for (clear_level_ = 1; clear_level_ <= 2 && !validBodies(result); ++clear_level_)
+      result = escapeBodies(pivot, d, result, validFor, validBodies, now);
+    clear_level_ = 0;
   }
   // Spring band as a constraint: move the end into [proximity, far] x rest length of each partner
   // (a few projection sweeps, the length to the pivot kept), if that keeps clear of the bodies.

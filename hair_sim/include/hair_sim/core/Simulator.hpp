@@ -188,6 +188,8 @@ class Simulator {
   std::vector<std::size_t> near_;
   std::vector<Vec3> q_pivot_, q_prev_;
   std::vector<char> pivot_inside_, is_near_;
+  /// clearOf's tests: 0 all, 1 without the swept test, 2 the end point alone (resolveCollisions' fallbacks).
+  int clear_level_ = 0;
   std::vector<Vec3> row_dirs_;  ///< relaxStrip: a row's directions before the parallel fallback
   // The current strip at the start of the substep (positions, directions, segment midpoints).
   std::vector<Vec3> start_pos_, start_dir_, start_mid_;
