@@ -1,8 +1,9 @@
 /// Fuzz entry for the node's message handling without a ROS master: bytes deserialised with
 /// ros::serialization into hair_sim_msgs/Wind, hair_sim_msgs/HairEvent and tf2_msgs/TFMessage, turned into
-/// core inputs the way hair_sim_node does it (HairSimNode::onWind's checks, HairSimNode::schedule ->
-/// eventFromMsg -> Event::findProblem -> EventSchedule::add, the transforms through a tf2 buffer and
-/// tf2::transformToEigen into HeadMotionEstimator), then a few Simulator substeps with them (a small
+/// core inputs the way hair_sim_node does it (checkWind from InputChecks, HairSimNode::schedule ->
+/// eventFromMsg -> Event::findProblem -> EventSchedule::add, the transforms through checkTransform into a
+/// tf2 buffer and tf2::transformToEigen into HeadMotionEstimator with the node's default teleport limits,
+/// Simulator::forgetBodyMotion after a teleport), then a few Simulator substeps with them (a small
 /// hairstyle: the first strips of config/hairstyles/default.yaml, the bodies of config/hair_sim.yaml).
 ///
 /// Input: byte 0 = flags, then three chunks, each a little-endian uint16 length and that many bytes: the
@@ -10,8 +11,9 @@
 /// it). A bug aborts: a crash, an unexpected exception, undefined behaviour (under the sanitizers), an event
 /// eventFromMsg accepts but EventSchedule::add refuses, or a non-finite control point.
 ///
-/// The node's own Wind checks are repeated here (they are members of HairSimNode, which needs a master):
-/// keep them in step with HairSimNode::onWind until they move into a ROS-free check function.
+/// The glue between those calls (lookups, holding the last good pose, the order of the calls) is
+/// HairSimNode's, repeated here because the node needs a master: keep it in step with HairSimNode::onTf,
+/// update and schedule.
 #include <console_bridge/console.h>
 #include <ros/serialization.h>
 #include <tf2/buffer_core.h>
@@ -36,6 +38,7 @@
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
 #include "hair_sim/ros/HairMessages.hpp"
+#include "hair_sim/ros/InputChecks.hpp"
 
 #ifndef HAIR_SIM_REPO_ROOT
 #error "HAIR_SIM_REPO_ROOT must name the repository (config/ is read from it)"
@@ -90,14 +93,6 @@ bool deserialize(const std::uint8_t* data, std::size_t n, M* msg) {
   }
 }
 
-/// HairSimNode::onWind's checks (see the file comment).
-bool windAccepted(const hair_sim_msgs::Wind& msg) {
-  const Vec3 v(msg.velocity.x, msg.velocity.y, msg.velocity.z);
-  if (!v.allFinite() || !std::isfinite(msg.turbulence) || !std::isfinite(msg.ramp_time)) return false;
-  if (msg.turbulence < 0.0 || msg.ramp_time < 0.0) return false;
-  return v.norm() <= 1000.0;
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -130,7 +125,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   double first_stamp = std::numeric_limits<double>::infinity(), last_stamp = -first_stamp;
   if (have_tf) {
     int k = 0;
-    for (geometry_msgs::TransformStamped t : tf.transforms) {
+    for (const geometry_msgs::TransformStamped& given : tf.transforms) {
+      // HairSimNode::onTf: a bad transform never enters the buffer, a non-unit quaternion is normalised.
+      geometry_msgs::TransformStamped t;
+      bool normalised = false;
+      const std::string problem = checkTransform(given, &t, &normalised);
+      if (!problem.empty()) continue;
       t.header.frame_id = kWorld;
       t.child_frame_id = kHead;
       // Stamps: the fuzzer's, folded into the first few substeps (bit 0 of flags: keep them as given).
@@ -149,7 +149,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // Wind (its frame_id taken as the world frame).
   Vec3 wind = Vec3::Zero();
   hair_sim_msgs::Wind wind_msg;
-  if (chunk[0] && deserialize(chunk[0], length[0], &wind_msg) && windAccepted(wind_msg))
+  if (chunk[0] && deserialize(chunk[0], length[0], &wind_msg) && checkWind(wind_msg).empty())
     wind = Vec3(wind_msg.velocity.x, wind_msg.velocity.y, wind_msg.velocity.z);
 
   // Event, as HairSimNode::schedule (stamp zero = now: t = 1 s here).
@@ -173,7 +173,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   // Substeps as HairSimNode::update: from the earliest pose, each pose sampled from the buffer.
   Simulator sim(fixture.style, fixture.config.physics, fixture.config.bodies);
-  HeadMotionEstimator head(0.02);
+  HeadMotionEstimator head(0.02);  // the node's defaults: head_smoothing, teleport_distance, teleport_angle
+  head.setTeleportLimits(0.5, 1.0);
   double t0 = 1.0;
   Iso3 pose = Iso3::Identity();
   bool started = false;
@@ -203,6 +204,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       bug("event sample not finite at t = " + std::to_string(t));
     StepInputs in;
     in.head = head.update(pose, dt);
+    if (head.teleported()) sim.forgetBodyMotion();
     in.wind = wind + events.wind;
     in.turbulence = &events.turbulence;
     in.gravity = &events.gravity;

@@ -126,12 +126,13 @@ Generated generate(double seconds, std::uint64_t seed) {
     e.ease = rng.chance(0.2) ? 0.0 : rng.uniform(0.0, std::min(3.0, longest_ease));
     switch (e.type) {
       case EventType::Wind:
-        e.vector = rng.direction() * (limit ? 1000.0 : rng.uniform(0.0, 15.0));
+        e.vector = rng.direction() * (limit ? 1000.0 * (1.0 - 1e-9) : rng.uniform(0.0, 15.0));
         break;
       case EventType::WindGust: {
         const double mean = limit ? 250.0 : rng.uniform(0.5, 10.0);
         e.vector = rng.direction() * mean;
-        e.peak = limit ? 4.0 * mean : rng.uniform(mean, 4.0 * mean);
+        e.peak = limit ? 4.0 * e.vector.norm() * (1.0 - 1e-9)
+                       : rng.uniform(1.0 + 1e-9, 4.0 - 1e-9) * e.vector.norm();
         e.period = limit ? 1e-3 : rng.uniform(0.5, 5.0);
         e.jitter = rng.uniform(0.0, 0.5);
         e.seed = rng.next() % 1000000;
@@ -145,7 +146,7 @@ Generated generate(double seconds, std::uint64_t seed) {
         break;
       case EventType::Gravity:
         e.vector =
-            limit ? rng.direction() * 100.0
+            limit ? Vec3(rng.direction() * (100.0 * (1.0 - 1e-9)))
                   : (rng.chance(0.2) ? Vec3(Vec3::Zero()) : Vec3(rng.direction() * rng.uniform(0.0, 20.0)));
         break;
       case EventType::Nod:
