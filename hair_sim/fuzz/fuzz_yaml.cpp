@@ -20,6 +20,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <yaml-cpp/exceptions.h>
 
@@ -89,8 +90,13 @@ void checkScenario(const Scenario& s) {
   requireFinite(std::isfinite(s.duration) && std::isfinite(s.output_rate), "duration, output_rate");
   const EventSchedule schedule = s.schedule();
   const Vec3 g(0.0, 0.0, -9.81);
-  for (int i = 0; i <= 16; ++i) {
-    const double t = s.duration * i / 16.0;
+  std::vector<double> times;
+  for (int i = 0; i <= 16; ++i) times.push_back(s.duration * i / 16.0);
+  for (std::size_t i = 1; i < s.head.size() && i < 64; ++i) {  // between keyframes, where tangents act
+    times.push_back(0.5 * (s.head[i - 1].t + s.head[i].t));
+    times.push_back(s.head[i - 1].t + 0.1 * (s.head[i].t - s.head[i - 1].t));
+  }
+  for (const double t : times) {
     const Iso3 pose = s.headPose(t);
     requireFinite(pose.matrix().allFinite(), "head pose at t = " + std::to_string(t));
     requireFinite(s.windVelocity(t).allFinite(), "wind at t = " + std::to_string(t));
