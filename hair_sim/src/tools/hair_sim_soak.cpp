@@ -399,11 +399,15 @@ int main(int argc, char** argv) {
     if (!summary.all_finite) fail("the runner saw non-finite points");
 
     // The events acting at a time, and whether a violent head key is within 0.3 s.
+    // The events acting at a time (open-ended ones until the next of their type takes over, as the
+    // schedule has it; the schedule keeps the scenario's order, which is by start), and any violent head
+    // key within 0.3 s.
+    const EventSchedule schedule = g.scenario.schedule();
     auto acting = [&](double t) {
       std::string out = "[";
-      for (std::size_t i = 0; i < g.scenario.events.size(); ++i) {
-        const Event& e = g.scenario.events[i];
-        if (e.start <= t && (e.duration == 0.0 || t <= e.start + e.duration))
+      for (std::size_t i = 0; i < schedule.size(); ++i) {
+        const Event& e = schedule.event(i);
+        if (e.start <= t && t <= schedule.end(i))
           out += (out.size() > 1 ? ", " : "") + jsonString(describe(e, g.extreme[i]));
       }
       for (std::size_t i = 1; i < g.scenario.head.size(); ++i) {
