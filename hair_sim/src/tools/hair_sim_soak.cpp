@@ -440,7 +440,22 @@ int main(int argc, char** argv) {
       << ", \"max_width_ratio_t\": " << formatDouble(max_width_t)
       << ", \"substeps_outside_band\": " << band_breaches;
     // The worst ten episodes of each kind, with what was acting then.
+    // Was an input at the validation's limits (or a violent head key) acting at t?
+    auto extremeAt = [&](double t) {
+      for (std::size_t i = 0; i < schedule.size(); ++i)
+        if (g.extreme[i] && schedule.event(i).start <= t && t <= schedule.end(i)) return true;
+      for (std::size_t i = 1; i < g.scenario.head.size(); ++i)
+        if (std::abs(g.scenario.head[i].t - t) < 0.3 && g.scenario.head[i].t - g.scenario.head[i - 1].t < 0.2)
+          return true;
+      return false;
+    };
     auto listEpisodes = [&](const char* name, const char* value, std::vector<Episode> list) {
+      long ordinary = 0;
+      double ordinary_max = 0.0;
+      for (const Episode& e : list)
+        if (!extremeAt(e.t_max)) ++ordinary, ordinary_max = std::max(ordinary_max, e.max);
+      o << ", \"" << name << "_episodes_without_extreme_input\": " << ordinary << ", \"" << name
+        << "_max_without_extreme_input\": " << formatDouble(ordinary_max);
       std::stable_sort(list.begin(), list.end(),
                        [](const Episode& a, const Episode& b) { return a.max > b.max; });
       long substeps_in = 0;
