@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# hair_sim: set up, build and run. Usage: ./run.sh demo | test | bench [flags] | build
+# hair_sim: set up, build and run. Usage: ./run.sh demo | test | bench [flags] | build | fuzz [s] | sanitize | soak [s]
 # Installs what it needs with apt (as root, or through sudo) on a fresh Debian 12 machine.
 set -eo pipefail
 cd "$(dirname "$(readlink -f "$0")")"
@@ -19,6 +19,8 @@ PACKAGES="build-essential cmake catkin ros-core-dev rosbash python3-rostest libr
 # The rviz display plugin hair_sim/HairDisplay (librviz-dev brings Qt 5, OGRE 1.12 and pluginlib) and its test
 # (rviz in Python, screenshots read with PIL and numpy).
 PACKAGES="$PACKAGES librviz-dev python3-rviz"
+# ./run.sh fuzz: clang and its runtime libraries (libclang_rt.fuzzer, asan, ubsan) for libFuzzer.
+PACKAGES="$PACKAGES clang libclang-rt-14-dev"
 
 install_deps() {
   local missing=()
@@ -94,8 +96,53 @@ case "$cmd" in
     cat build/load.json 2>/dev/null || echo "run.sh: no figures (build/load.json)" >&2
     exit $status
     ;;
+  fuzz)
+    # libFuzzer on the YAML loaders and the message handling (docs/robustness-suites.md): clang build in
+    # build-fuzz/ with ASan and UBSan, SECONDS (default 60) per target from test/fuzz_corpus/<target>/.
+    install_deps
+    secs=${2:-60}
+    mkdir -p build-fuzz/devel/lib/python3/dist-packages
+    CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHAIR_SIM_FUZZ=ON \
+      -DCATKIN_ENABLE_TESTING=OFF -DCATKIN_DEVEL_PREFIX="$ROOT/build-fuzz/devel" \
+      -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined,fuzzer-no-link -fno-sanitize-recover=undefined -fno-omit-frame-pointer" \
+      >build-fuzz/cmake.log 2>&1 || { cat build-fuzz/cmake.log; exit 1; }
+    cmake --build build-fuzz -j"$(nproc)" --target fuzz_yaml fuzz_messages
+    status=0
+    for t in yaml messages; do
+      mkdir -p "build-fuzz/corpus/$t" "build-fuzz/crashes/$t"
+      echo "run.sh: fuzz_$t for $secs s (new inputs: build-fuzz/corpus/$t, crashers: build-fuzz/crashes/$t)" >&2
+      # New inputs go to the first folder; test/fuzz_corpus/<target> (seeds and fixed crashers) is read only.
+      build-fuzz/devel/lib/hair_sim/fuzz_$t -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \
+        -print_final_stats=1 -artifact_prefix="build-fuzz/crashes/$t/" "build-fuzz/corpus/$t" "test/fuzz_corpus/$t" \
+        2>&1 | tee "build-fuzz/fuzz_$t.log" | grep -E "^#[0-9]+ +(DONE|INITED)|BUG|ERROR|SUMMARY|stat::" || true
+      grep -q "Test unit written to" "build-fuzz/fuzz_$t.log" && status=1
+    done
+    [ $status -eq 0 ] || echo "run.sh: crashers in build-fuzz/crashes/ (fix, then copy them into test/fuzz_corpus/<target>/)" >&2
+    exit $status
+    ;;
+  sanitize)
+    # The unit tests (gtest), the fuzz replays and the short soak under AddressSanitizer and
+    # UndefinedBehaviorSanitizer, in build-asan/ (the rostests are not run here).
+    install_deps
+    mkdir -p build-asan/devel/lib/python3/dist-packages
+    cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCATKIN_DEVEL_PREFIX="$ROOT/build-asan/devel" \
+      -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer" \
+      -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
+      >build-asan/cmake.log 2>&1 || { cat build-asan/cmake.log; exit 1; }
+    cmake --build build-asan -j"$(nproc)" --target unit_tests
+    cd build-asan && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+      ctest --output-on-failure -j"$(nproc)" -R "_gtest_|FuzzReplay_|SoakShort"
+    ;;
+  soak)
+    # One simulated hour (or SECONDS) of random events and head motion: JSON summary in build/soak.json.
+    install_deps
+    mkdir -p build/devel/lib/python3/dist-packages
+    cmake -S . -B build -DCATKIN_DEVEL_PREFIX="$ROOT/build/devel" >build/cmake.log 2>&1 || { cat build/cmake.log; exit 1; }
+    cmake --build build -j"$(nproc)" --target hair_sim_soak
+    exec build/devel/lib/hair_sim/hair_sim_soak --seconds "${2:-3600}" --json-out build/soak.json
+    ;;
   *)
-    echo "usage: ./run.sh demo | test | offline-demo | bench [benchmark flags] | build" >&2
+    echo "usage: ./run.sh demo | test | offline-demo | bench [benchmark flags] | build | load [seconds] | fuzz [seconds] | sanitize | soak [seconds]" >&2
     exit 2
     ;;
 esac

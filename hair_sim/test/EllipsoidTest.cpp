@@ -746,5 +746,28 @@ TEST(ReactionForce, NormalAndTangentialComponents) {
   }
 }
 
+// A head pose from tf whose quaternion is off unit norm by 2.8e-7 (the fuzz_messages crasher
+// test/fuzz_corpus/messages/crash_quaternion_norm_off_3e-7): its matrix is 1.1e-6 off orthonormal, just
+// outside the constructor's 1e-6. transformed() takes the nearest rotation; a pose 1 % off still throws.
+TEST(EllipsoidTest, TransformedTakesANearlyUnitQuaternionAsItsRotation) {
+  const Ellipsoid body(Vec3(0.0, 0.19, -0.24), Mat3::Identity(), Vec3(0.07, 0.09, 0.055));
+  Iso3 pose = Iso3::Identity();  // the crasher's head rotation, as tf2::transformToEigen made it
+  pose.linear() = Vec3(0.9999994368216198, 0.9999994368216198, 1.0).asDiagonal();
+  pose.translation() = Vec3(0.0, 0.0, 1.6);
+  const Ellipsoid moved = body.transformed(pose);
+  EXPECT_LT((moved.rotation() - Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LT((moved.center() - Vec3(0.0, 0.19, 1.36)).norm(), 1e-6);  // translation kept, rotation ~ I
+  // A turned pose: the result is a rotation (to rounding) within |q|^2 - 1 = 5.6e-7 of the normalised
+  // quaternion's (the nearest rotation to the unnormalised matrix differs from it by that order).
+  const double a = 1.4;  // a half-turn-ish yaw: the matrix is 2.2e-6 off orthonormal
+  pose.linear() = Quat(0.99999972 * std::cos(a), 0.0, 0.0, 0.99999972 * std::sin(a)).toRotationMatrix();
+  const Mat3 r = body.transformed(pose).rotation();
+  const Mat3 expected = Eigen::AngleAxisd(2.0 * a, Vec3::UnitZ()).toRotationMatrix();
+  EXPECT_LT((r.transpose() * r - Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((r - expected).cwiseAbs().maxCoeff(), 6e-7);
+  pose.linear() = 1.01 * Mat3::Identity();
+  EXPECT_THROW(body.transformed(pose), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace hair_sim

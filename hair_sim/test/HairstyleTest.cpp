@@ -59,6 +59,10 @@ TEST(HairstyleTest, EveryMalformedKeyIsNamedWithItsValue) {
       {"[[0, -0.01, 0.0994987437]", "[[0, -0.01, 0.2]", "strips[0].points[0]", "off the scalp"},
       {"    width: 0.02\n", "    width: 0.02\n    lenght: 3\n", "strips[0].lenght", "unknown key"},
       {"format_version: 1", "format_version: 2", "format_version", "2"},
+      // Found by fuzz_yaml: far coordinates overflowed the simulator's spring grid (undefined behaviour).
+      {"[0, 0.01, 0.25]]", "[0, -0103062241852005262, 0.25]]", "strips[0].points[7]", "+-100 m"},
+      {"radii: [0.1, 0.1, 0.1]", "radii: [0.1, 11, 0.1]", "scalp.radii", "(0, 10]"},
+      {"center: [0, 0, 0], rpy", "center: [1e200, 0, 0], rpy", "scalp.center", "+-100 m"},
   };
   test::expectEditsNamed(kGood, cases, [](const std::string& path) { loadHairstyle(path); });
 }

@@ -58,6 +58,11 @@ TEST(ScenarioTest, MalformedKeysAreNamed) {
       {"velocity: [1, 0, 0]", "velocity: [1e9, 0, 0]", "wind[0].velocity", "1000 m/s"},
       {"velocity: [1, 0, 0]}", "velocity: [1, 0, 0], gust: 1}", "wind[0].gust", "unknown key"},
       {"head:\n", "heads: 1\nhead:\n", "heads", "unknown key"},
+      // Found by fuzz_yaml: a list as a key (a bare YAML bad conversion before), far positions (NaN pose).
+      {"velocity: [1, 0, 0]}", "velocity: [1, 0, 0], [2]: 1}", "wind[0]", "a key must be a name"},
+      {"[0, 0, 1.6], rpy: [0, 0, 0.5]", "[1.0e308, 0, 1.6], rpy: [0, 0, 0.5]", "head[1].position", "10000 m"},
+      {"rpy: [0, 0, 0.5]", "rpy: [0, 0, 5000]", "head[1].rpy", "1000 rad"},
+      {"t: 1.0", "t: 1.0e-9", "head[1].t", "1e-06 s"},
   };
   test::expectEditsNamed(good, cases, [](const std::string& path) { Scenario::load(path); });
 }

@@ -6,6 +6,12 @@
 
 namespace hair_sim {
 
+namespace {
+constexpr double kMaxHeadCoordinate = 1e4;  ///< m
+constexpr double kMaxHeadAngle = 1e3;       ///< rad
+constexpr double kMinKeySpacing = 1e-6;     ///< s between head keyframes
+}  // namespace
+
 Scenario Scenario::load(const std::string& path) {
   const YamlReader y = YamlReader::loadFile(path);
   y.requireKeys({"duration", "output_rate", "head", "wind", "events"});
@@ -21,9 +27,15 @@ Scenario Scenario::load(const std::string& path) {
     key.t = k.getDouble("t", 0.0, 1e6);
     key.position = k.getVec3("position", Vec3::Zero());
     key.rpy = k.getVec3("rpy", Vec3::Zero());
-    if (!s.head.empty() && key.t <= s.head.back().t)
-      throw k.error("t", formatDouble(key.t) + " s is not after the previous keyframe's " +
-                             formatDouble(s.head.back().t) + " s");
+    // Bounds that keep the cubic's tangents (differences over time differences) finite (fuzz_yaml found
+    // positions of 1e308 turning the head pose into NaN).
+    if (!(key.position.cwiseAbs().maxCoeff() <= kMaxHeadCoordinate))
+      throw k.error("position", "every coordinate must be within +-" + formatDouble(kMaxHeadCoordinate) + " m");
+    if (!(key.rpy.cwiseAbs().maxCoeff() <= kMaxHeadAngle))
+      throw k.error("rpy", "every angle must be within +-" + formatDouble(kMaxHeadAngle) + " rad");
+    if (!s.head.empty() && !(key.t >= s.head.back().t + kMinKeySpacing))
+      throw k.error("t", formatDouble(key.t) + " s is not at least " + formatDouble(kMinKeySpacing) +
+                             " s after the previous keyframe's " + formatDouble(s.head.back().t) + " s");
     s.head.push_back(key);
   }
   if (y.has("wind")) {

@@ -4,7 +4,8 @@
 /// motions turn the keyframed head about its origin, gravity events change gravity).
 /// The head moves along a C1 cubic Hermite curve through the keyframes (Catmull-Rom tangents,
 /// zero tangents at the first and last key) in position and in roll/pitch/yaw; the wind is linear
-/// between its keys. Before the first and after the last key the values hold.
+/// between its keys. Before the first and after the last key the values hold. Head keyframes: times at
+/// least 1e-6 s apart, positions within +-1e4 m, angles within +-1e3 rad.
 #include <string>
 #include <vector>
 

@@ -13,6 +13,8 @@ namespace hair_sim {
 namespace {
 
 constexpr double kRotationTolerance = 1e-6;
+/// transformed(): a pose's rotation this close to orthonormal is replaced by the nearest rotation.
+constexpr double kPoseTolerance = 1e-4;
 /// Above this deviation from orthonormality the accepted rotation is replaced by the nearest rotation
 /// (polar factor), so that S, Sinv and the local frame used by closestPoint agree to rounding.
 constexpr double kReorthonormaliseAbove = 1e-12;
@@ -104,7 +106,17 @@ Ellipsoid Ellipsoid::inflated(double margin) const {
 }
 
 Ellipsoid Ellipsoid::transformed(const Iso3& pose) const {
-  return Ellipsoid(pose * center_, pose.linear() * rotation_, radii_);
+  // Poses come from tf: a quaternion whose norm is off 1 by a few 1e-7 (float rounding, within what the
+  // node and tf2 accept) gives a matrix just outside kRotationTolerance. Such a pose is taken as its
+  // nearest rotation; one further off is still an error (found by fuzz_messages).
+  const Mat3& r = pose.linear();
+  if (r.allFinite() && (r.transpose() * r - Mat3::Identity()).cwiseAbs().maxCoeff() <= kPoseTolerance &&
+      r.determinant() > 0.0) {
+    const Eigen::JacobiSVD<Mat3> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Mat3 nearest = svd.matrixU() * svd.matrixV().transpose();  // polar factor
+    return Ellipsoid(pose * center_, nearest * rotation_, radii_);
+  }
+  return Ellipsoid(pose * center_, r * rotation_, radii_);
 }
 
 /// At the centre itself (the gradient vanishes) the +direction of the smallest axis is returned, the

@@ -10,6 +10,11 @@ namespace hair_sim {
 
 namespace {
 
+/// Sanity bounds (head frame, m): hair is at most 10 m long (hair_length) on a head; far larger numbers are
+/// typos, and beyond 2^21 spring radii the simulator's spring grid overflows (found by fuzz_yaml).
+constexpr double kMaxCoordinate = 100.0;
+constexpr double kMaxScalpRadius = 10.0;
+
 Rgba readColor(const YamlReader& strip) {
   const YamlReader c = strip.child("color");
   if (!c.isSequence() || (c.size() != 3 && c.size() != 4))
@@ -36,10 +41,14 @@ Hairstyle loadHairstyle(const std::string& path) {
   scalp.requireKeys({"center", "rpy", "radii"});
   const Vec3 radii = scalp.getVec3("radii");
   for (int i = 0; i < 3; ++i)
-    if (radii[i] <= 0.0)
-      throw scalp.error("radii", "every radius must be > 0, got " + formatDouble(radii[i]));
-  style.scalp =
-      Ellipsoid::fromRpy(scalp.getVec3("center", Vec3::Zero()), scalp.getVec3("rpy", Vec3::Zero()), radii);
+    if (!(radii[i] > 0.0 && radii[i] <= kMaxScalpRadius))
+      throw scalp.error("radii", "every radius must be in (0, " + formatDouble(kMaxScalpRadius) + "] m, got " +
+                                     formatDouble(radii[i]));
+  const Vec3 center = scalp.getVec3("center", Vec3::Zero());
+  if (!(center.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+    throw scalp.error("center", "every coordinate must be within +-" + formatDouble(kMaxCoordinate) +
+                                    " m of the head frame's origin");
+  style.scalp = Ellipsoid::fromRpy(center, scalp.getVec3("rpy", Vec3::Zero()), radii);
 
   const YamlReader strips = root.child("strips");
   strips.requireSequence(1);
@@ -63,7 +72,12 @@ Hairstyle loadHairstyle(const std::string& path) {
                               std::to_string(s.rows) + " = " + std::to_string(s.pointCount()));
     }
     s.points.resize(pts.size());
-    for (std::size_t p = 0; p < pts.size(); ++p) s.points[p] = pts.at(p).asVec3();
+    for (std::size_t p = 0; p < pts.size(); ++p) {
+      s.points[p] = pts.at(p).asVec3();
+      if (!(s.points[p].cwiseAbs().maxCoeff() <= kMaxCoordinate))
+        throw pts.at(p).error("", "every coordinate must be within +-" + formatDouble(kMaxCoordinate) +
+                                      " m of the head frame's origin");
+    }
     style.strips.push_back(std::move(s));
   }
   style.validate(path);

@@ -76,7 +76,11 @@ std::size_t YamlReader::size() const { return node_.size(); }
 void YamlReader::requireKeys(std::initializer_list<const char*> allowed) const {
   if (!node_.IsMap()) throw error("", "expected a map, got " + show(node_));
   for (const auto& kv : node_) {
-    const std::string key = kv.first.as<std::string>();
+    // A key must be a plain name: `{[1, 2]: x}` or `{? {a: b}}` parse as maps with a list or map key.
+    if (!kv.first.IsScalar())
+      throw std::invalid_argument(where(kv.first, key_path_) + ": a key must be a name, got " +
+                                  show(kv.first));
+    const std::string key = kv.first.Scalar();
     bool ok = false;
     for (const char* a : allowed) ok = ok || key == a;
     if (!ok) {

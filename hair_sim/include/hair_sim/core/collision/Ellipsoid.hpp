@@ -34,7 +34,9 @@ class Ellipsoid {
 
   /// The same ellipsoid with every radius grown by margin (m, may be negative while radii stay > 0).
   Ellipsoid inflated(double margin) const;
-  /// The ellipsoid moved rigidly: centre and orientation composed with pose (pose * this).
+  /// The ellipsoid moved rigidly: centre and orientation composed with pose (pose * this). A pose whose
+  /// rotation is orthonormal within 1e-4 (a tf quaternion slightly off unit norm) counts as the nearest
+  /// rotation; one further off throws std::invalid_argument.
   Ellipsoid transformed(const Iso3& pose) const;
 
   /// Point in sphere space.

@@ -3,6 +3,7 @@
 ///   format_version: 1
 ///   scalp: {center: [x, y, z], rpy: [r, p, y], radii: [a, b, c]}
 ///   strips:
+///   (every coordinate within +-100 m, scalp radii in (0, 10] m)
 ///     - {name: s0, columns: 2, rows: 5, hair_length: 0.25, width: 0.03, thickness_margin: 0.004,
 ///        color: [r, g, b, a], points: [[x, y, z], ...]}   # rows * columns points, row-major, row 0 = roots
 #include <string>
