@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# hair_sim: set up, build and run. Usage: ./run.sh demo | test | bench [flags] | build | fuzz [s] | sanitize | soak [s]
+# hair_sim: set up, build and run. Usage: ./run.sh demo | test | bench [flags] | build | load [s] | fuzz [s] | sanitize | soak [s]
 # Installs what it needs with apt (as root, or through sudo) on a fresh Debian 12 machine.
 set -eo pipefail
 cd "$(dirname "$(readlink -f "$0")")"
