@@ -114,7 +114,7 @@ case "$cmd" in
       # New inputs go to the first folder; test/fuzz_corpus/<target> (seeds and fixed crashers) is read only.
       build-fuzz/devel/lib/hair_sim/fuzz_$t -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \
         -print_final_stats=1 -artifact_prefix="build-fuzz/crashes/$t/" "build-fuzz/corpus/$t" "test/fuzz_corpus/$t" \
-        2>&1 | tee "build-fuzz/fuzz_$t.log" | grep -E "^#[0-9]+ +(DONE|INITED)|BUG|ERROR|SUMMARY|stat::" || true
+        2>&1 | tee "build-fuzz/fuzz_$t.log" | grep -E "^#[0-9]+[[:space:]]+(DONE|INITED)|BUG|ERROR|SUMMARY|stat::" || true
       grep -q "Test unit written to" "build-fuzz/fuzz_$t.log" && status=1
     done
     [ $status -eq 0 ] || echo "run.sh: crashers in build-fuzz/crashes/ (fix, then copy them into test/fuzz_corpus/<target>/)" >&2
