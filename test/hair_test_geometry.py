@@ -2,6 +2,7 @@
 ellipsoids of config/hair_sim.yaml (plain Python, no numpy on Debian's ROS install)."""
 
 import math
+import time
 
 
 def quat_to_matrix(x, y, z, w):
@@ -80,3 +81,15 @@ class Body(object):
         m = mat_mul(scale, mat_mul(transpose(self.rotation), transpose(frame_pose.r)))
         center_world = tuple(a + b for a, b in zip(mat_vec(frame_pose.r, self.center), frame_pose.t))
         return m, mat_vec(m, center_world)
+
+
+def wait_until(predicate, timeout, what, fail, alive=lambda: True, period=0.02):
+    """Polls predicate() until it returns something true, which is returned; after timeout s (or when
+    alive() turns false) calls fail('timed out ... waiting for <what>') (a TestCase's fail)."""
+    deadline = time.time() + timeout
+    while time.time() < deadline and alive():
+        result = predicate()
+        if result:
+            return result
+        time.sleep(period)
+    fail('timed out after %.0f s waiting for %s' % (timeout, what))

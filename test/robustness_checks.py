@@ -52,6 +52,10 @@ try:
 except ImportError:  # pragma: no cover
     from xmlrpclib import ServerProxy
 
+# Shared helpers (this folder is not on sys.path when catkin's relay runs the script).
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+from hair_test_geometry import wait_until  # noqa: E402
+
 PKG = 'hair_sim'
 NAME = 'robustness_checks'
 
@@ -152,13 +156,7 @@ class RobustnessChecks(unittest.TestCase):
 
     # -- helpers (test thread)
     def wait_for(self, predicate, timeout, what):
-        deadline = time.time() + timeout
-        while time.time() < deadline and not rospy.is_shutdown():
-            result = predicate()
-            if result:
-                return result
-            time.sleep(0.02)
-        self.fail('timed out after %.0f s waiting for %s' % (timeout, what))
+        return wait_until(predicate, timeout, what, self.fail, lambda: not rospy.is_shutdown())
 
     def log_index(self):
         with self.lock:

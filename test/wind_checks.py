@@ -58,7 +58,7 @@ ROOT_TOLERANCE = 1e-4
 # ---------------------------------------------------------------------------------------------- geometry
 # Shared geometry (this folder is not on sys.path when catkin's relay runs the script).
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from hair_test_geometry import Body, Pose  # noqa: E402
+from hair_test_geometry import Body, Pose, wait_until  # noqa: E402
 
 def mean(values):
     values = list(values)
@@ -198,13 +198,7 @@ class WindChecks(unittest.TestCase):
         return out
 
     def wait_for(self, predicate, timeout, what):
-        deadline = time.time() + timeout
-        while time.time() < deadline and not rospy.is_shutdown():
-            result = predicate()
-            if result:
-                return result
-            time.sleep(0.02)
-        self.fail('timed out after %.0f s waiting for %s' % (timeout, what))
+        return wait_until(predicate, timeout, what, self.fail, lambda: not rospy.is_shutdown())
 
     def test_a_wind_equilibrium_matches_offline(self):
         # The hair at rest first: two states in a row with the same tips.
