@@ -30,7 +30,8 @@ Scenario Scenario::load(const std::string& path) {
     // Bounds that keep the cubic's tangents (differences over time differences) finite (fuzz_yaml found
     // positions of 1e308 turning the head pose into NaN).
     if (!(key.position.cwiseAbs().maxCoeff() <= kMaxHeadCoordinate))
-      throw k.error("position", "every coordinate must be within +-" + formatDouble(kMaxHeadCoordinate) + " m");
+      throw k.error("position",
+                    "every coordinate must be within +-" + formatDouble(kMaxHeadCoordinate) + " m");
     if (!(key.rpy.cwiseAbs().maxCoeff() <= kMaxHeadAngle))
       throw k.error("rpy", "every angle must be within +-" + formatDouble(kMaxHeadAngle) + " rad");
     if (!s.head.empty() && !(key.t >= s.head.back().t + kMinKeySpacing))

@@ -42,8 +42,8 @@ Hairstyle loadHairstyle(const std::string& path) {
   const Vec3 radii = scalp.getVec3("radii");
   for (int i = 0; i < 3; ++i)
     if (!(radii[i] > 0.0 && radii[i] <= kMaxScalpRadius))
-      throw scalp.error("radii", "every radius must be in (0, " + formatDouble(kMaxScalpRadius) + "] m, got " +
-                                     formatDouble(radii[i]));
+      throw scalp.error("radii", "every radius must be in (0, " + formatDouble(kMaxScalpRadius) +
+                                     "] m, got " + formatDouble(radii[i]));
   const Vec3 center = scalp.getVec3("center", Vec3::Zero());
   if (!(center.cwiseAbs().maxCoeff() <= kMaxCoordinate))
     throw scalp.error("center", "every coordinate must be within +-" + formatDouble(kMaxCoordinate) +
