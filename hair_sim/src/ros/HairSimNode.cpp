@@ -453,6 +453,17 @@ bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const 
   return true;
 }
 
+void HairSimNode::stepTo(const ros::Time& t, const HeadState& head, const std::vector<Iso3>& body_frames) {
+  StepInputs in;
+  in.head = head;
+  const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
+  in.wind = wind_scale_ * (windAt(t.toSec()) + events.wind);
+  in.turbulence = &events.turbulence;
+  in.gravity = &events.gravity;
+  in.body_frames = body_frames;
+  simulator_->step(in);
+}
+
 void HairSimNode::warnThrottled(const std::string& what, const std::string& text) {
   const ros::WallTime now = ros::WallTime::now();
   auto it = last_warning_.find(what);
@@ -522,14 +533,7 @@ void HairSimNode::update(bool from_tf) {
     const ros::WallTime held_start = ros::WallTime::now();
     while (sim_time_ + ros::Duration(dt) <= hold_until && held_steps < max_substeps_per_update_) {
       const ros::Time t = sim_time_ + ros::Duration(dt);
-      StepInputs in;
-      in.head = head_.update(held, dt);
-      const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
-      in.wind = wind_scale_ * (windAt(t.toSec()) + events.wind);
-      in.turbulence = &events.turbulence;
-      in.gravity = &events.gravity;
-      in.body_frames = last_body_frames_;  // bodies on the head move with it: held too
-      simulator_->step(in);
+      stepTo(t, head_.update(held, dt), last_body_frames_);  // bodies on the head are held with it
       sim_time_ = t;
       ++held_steps;
     }
@@ -571,8 +575,7 @@ void HairSimNode::update(bool from_tf) {
     for (std::size_t b = 0; b < config_.bodies.size() && frames_ok; ++b)
       frames_ok = lookupPose(config_.bodies[b].frame, t, frames[b]);
     if (!frames_ok) break;
-    StepInputs in;
-    in.head = head_.update(pose, dt);
+    const HeadState head = head_.update(pose, dt);
     if (head_.teleported()) {
       simulator_->forgetBodyMotion();
       ROS_WARN(
@@ -582,12 +585,7 @@ void HairSimNode::update(bool from_tf) {
       diagnostics_->droppedInput("head teleport of " + formatDouble(head_.jumpDistance()) + " m, " +
                                  formatDouble(head_.jumpAngle()) + " rad");
     }
-    const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
-    in.wind = wind_scale_ * (windAt(t.toSec()) + events.wind);
-    in.turbulence = &events.turbulence;
-    in.gravity = &events.gravity;
-    in.body_frames = frames;
-    simulator_->step(in);
+    stepTo(t, head, frames);
     diagnostics_->penetrations(simulator_->penetrationCount(), simulator_->maxPenetration());
     sim_time_ = t;
     last_body_frames_ = frames;

@@ -41,6 +41,8 @@ class HairSimNode {
   /// Steps to the newest head pose and publishes if due (from_tf) or always (the timer, which only
   /// acts while no tf has come in for 1.5 output periods).
   void update(bool from_tf);
+  /// One substep to t: the head state, the body frames, the wind and the events at t.
+  void stepTo(const ros::Time& t, const HeadState& head, const std::vector<Iso3>& body_frames);
   /// A warning about `what` (tf, wind, event): said at once when it differs from the last one about it,
   /// else at most every 2 s (a stream of the same bad input does not flood the log).
   void warnThrottled(const std::string& what, const std::string& text);
