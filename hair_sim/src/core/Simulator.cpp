@@ -454,16 +454,20 @@ bool Simulator::clearOf(std::size_t b, double d, const Vec3& u, const std::vecto
   return true;
 }
 
-Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
-                                  const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
+bool Simulator::clearOfAll(double d, const Vec3& u, const std::vector<Ellipsoid>& now,
+                           bool have_before) const {
+  for (std::size_t b : near_)
+    if (!clearOf(b, d, u, now, have_before)) return false;
+  return true;
+}
+
+Vec3 Simulator::clearBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
+                            bool have_before, int first_level) {
   // Validity for one body: end outside, segment not cutting through it (pivot outside), and the end's
   // path over the substep, relative to the moving body, not entering it (the paper's ray test).
-  auto validFor = [&](std::size_t b, const Vec3& u) { return clearOf(b, d, u, now, !before.empty()); };
-  auto validBodies = [&](const Vec3& u) {
-    for (std::size_t b : near_)
-      if (!validFor(b, u)) return false;
-    return true;
-  };
+  auto validFor = [&](std::size_t b, const Vec3& u) { return clearOf(b, d, u, now, have_before); };
+  auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, have_before); };
+  clear_level_ = first_level;
   Vec3 result = dir;
   if (!validBodies(dir)) {
     ++collisions_;
@@ -471,10 +475,18 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
     // No direction passes every test (a crevice between bodies moving fast, where every end's path over
     // the substep crosses one): the end outside every body comes first, so the swept test goes, then the
     // segment test (the hard guarantee is on where the points are after the substep).
-    for (clear_level_ = 1; clear_level_ <= 2 && !validBodies(result); ++clear_level_)
+    for (++clear_level_; clear_level_ <= 2 && !validBodies(result); ++clear_level_)
       result = escapeBodies(pivot, d, result, validFor, validBodies, now);
-    clear_level_ = 0;
   }
+  clear_level_ = 0;
+  return result;
+}
+
+Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
+                                  const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
+  auto validFor = [&](std::size_t b, const Vec3& u) { return clearOf(b, d, u, now, !before.empty()); };
+  auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, !before.empty()); };
+  const Vec3 result = clearBodies(pivot, d, dir, now, !before.empty());
   // Spring band as a constraint: move the end into [proximity, far] x rest length of each partner
   // (a few projection sweeps, the length to the pivot kept), if that keeps clear of the bodies.
   const int p_begin = partner_start_[static_cast<std::size_t>(point)];
@@ -623,16 +635,30 @@ bool Simulator::rowOutsideBand(std::size_t strip, int row) const {
   const std::size_t begin = static_cast<std::size_t>(strip_offset_[strip] + s.index(row, 0));
   const std::size_t end = begin + static_cast<std::size_t>(s.columns);
   const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
+  // relaxStrip may hold a row's far edge to that of the rows below it (tighten_to_).
+  const int to = tighten_to_.empty() ? row : tighten_to_[static_cast<std::size_t>(row)];
   for (std::size_t i = begin; i < end; ++i)
     for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
       const double rest = partner_rest_[static_cast<std::size_t>(q)];
       if (rest <= 0.0) continue;  // between strips
-      const double dist =
-          (positions_[i] - positions_[static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)])])
-              .norm();
-      if (dist > hi * rest * (1.0 + 1e-9) || dist < lo * rest) return true;
+      const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
+      double far_rest = rest;
+      for (int r = row + 1; r <= to; ++r) {
+        const std::size_t step = static_cast<std::size_t>((r - row) * s.columns);
+        far_rest = std::min(far_rest, withinRest(i + step, j + step, far_rest));
+      }
+      const double dist = (positions_[i] - positions_[j]).norm();
+      if (dist > hi * far_rest * (1.0 + 1e-9) || dist < lo * rest) return true;
     }
   return false;
+}
+
+double Simulator::withinRest(std::size_t i, std::size_t j, double fallback) const {
+  for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q)
+    if (static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]) == j &&
+        partner_rest_[static_cast<std::size_t>(q)] > 0.0)
+      return partner_rest_[static_cast<std::size_t>(q)];
+  return fallback;
 }
 
 void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
@@ -653,20 +679,43 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
     }
   }
   // Gauss-Seidel moves one end at a time, so when two columns cross (the end of one next to the pivot
-  // of the other) no single move meets the band, though a joint one does: parallel segments keep the
-  // distances of their pivots, which are within the band by induction from the roots (at rest), and
-  // turning them toward each other (or apart) brings their ends closer (or farther) continuously. So,
-  // from the roots out, a row still outside the band gets the directions place(mu) below for the first
-  // mu of 0, +-1/32, +-2/32, ..., +-1 that puts the row within the band with every segment clear of the
-  // bodies (the bodies keep the last word); if none does, the row stays as the passes left it.
+  // of the other), or when the pivots are as far apart as their own row's band allows and the rest width
+  // narrows toward the tips, no single move meets the band, though a joint one does: parallel segments
+  // keep the distances of their pivots, and turning them toward each other (or apart) brings their ends
+  // closer (or farther) continuously. So, from the roots out, a row still outside the band gets the
+  // directions place(mu) below for the first mu of 0, +-1/32, +-2/32, ..., +-1 that puts the row within
+  // the band once each segment has been turned clear of the bodies (clearBodies: an end pressed against
+  // a body slides along it); if none does, the row keeps what the passes left. The bodies keep the last
+  // word: every row, moved or not, is cleared of them from its (possibly moved) pivots.
   const bool crossed = stripOutsideBand(strip);
+  const bool have_before = !before.empty();
   row_dirs_.resize(static_cast<std::size_t>(s.columns));
+  tighten_to_.resize(static_cast<std::size_t>(s.rows));
+  for (int r = 0; r < s.rows; ++r) tighten_to_[static_cast<std::size_t>(r)] = r;
   for (int r = 1; crossed && r < s.rows; ++r) {
     auto at = [&](int c) { return static_cast<std::size_t>(offset + s.index(r, c)); };
     auto pivotOf = [&](int c) -> const Vec3& {
       return positions_[static_cast<std::size_t>(offset + s.index(r - 1, c))];
     };
-    for (int c = 0; c < s.columns; ++c) positions_[at(c)] = pivotOf(c) + length_[at(c)] * direction_[at(c)];
+    // Ends at the directions given, each turned clear of the bodies from its pivot; false when an end
+    // stays inside a body.
+    int level = 0;  // clearBodies' first level: 1 = without the swept test
+    auto settle = [&]() {
+      bool outside = true;
+      for (int c = 0; c < s.columns; ++c) {
+        const double d = length_[at(c)];
+        if (!now.empty()) {
+          prepareBodies(pivotOf(c), d, start_pos_[static_cast<std::size_t>(s.index(r, c))], now, before);
+          direction_[at(c)] = clearBodies(pivotOf(c), d, direction_[at(c)], now, have_before, level);
+          clear_level_ = 2;
+          outside = outside && clearOfAll(d, direction_[at(c)], now, have_before);
+          clear_level_ = 0;
+        }
+        positions_[at(c)] = pivotOf(c) + d * direction_[at(c)];
+      }
+      return outside;
+    };
+    settle();
     if (!rowOutsideBand(strip, r)) continue;
     Vec3 mean = Vec3::Zero(), centre = Vec3::Zero();
     for (int c = 0; c < s.columns; ++c) {
@@ -674,55 +723,66 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
       centre += pivotOf(c);
       row_dirs_[static_cast<std::size_t>(c)] = direction_[at(c)];
     }
-    if (mean.norm() < 1e-9) continue;
-    mean.normalize();
     centre /= s.columns;
     // Inward (mu > 0): toward directions whose ends all meet, d u = d sqrt(1 - (s/d)^2) a + s e with e the
     // unit vector to the centre, s the distance to it and a the part of m across e: the ends close in
     // continuously from the pivots' distances (mu = 0, parallel) to 0 (mu = 1). Outward (mu < 0):
     // m - |mu| e, the ends move apart.
-    auto place = [&](double mu) {
+    auto place = [&](const Vec3& m, double mu) {
       for (int c = 0; c < s.columns; ++c) {
         const double d = length_[at(c)];
         const Vec3 to_centre = centre - pivotOf(c);
         const double dist = to_centre.norm();
-        Vec3 u = mean;
+        Vec3 u = m;
         if (dist > 1e-12) {
           const Vec3 e = to_centre / dist;
           if (mu < 0.0) {
-            u = mean + mu * e;
+            u = m + mu * e;
           } else {
-            Vec3 across = mean - mean.dot(e) * e;
+            Vec3 across = m - m.dot(e) * e;
             across = across.norm() > 1e-9 ? Vec3(across.normalized()) : Vec3(e.unitOrthogonal());
             const double f = std::min(1.0, dist / d);
-            u = (1.0 - mu) * mean + mu * (std::sqrt(1.0 - f * f) * across + f * e);
+            u = (1.0 - mu) * m + mu * (std::sqrt(1.0 - f * f) * across + f * e);
           }
-          if (u.norm() < 1e-12) u = mean;
+          if (u.norm() < 1e-12) u = m;
         }
         direction_[at(c)] = u.normalized();
-        positions_[at(c)] = pivotOf(c) + d * direction_[at(c)];
       }
+      return settle();
     };
-    auto clear = [&]() {
-      for (int c = 0; c < s.columns; ++c) {
-        prepareBodies(pivotOf(c), length_[at(c)], start_pos_[static_cast<std::size_t>(s.index(r, c))], now,
-                      before);
-        for (std::size_t b : near_)
-          if (!clearOf(b, length_[at(c)], direction_[at(c)], now, !before.empty())) return false;
-      }
-      return true;
-    };
+    // The common direction m: the mean of the row's directions first; when the columns point far apart
+    // (a strip torn open by a violent input) that mean can point into a body, so then each column's own
+    // direction in turn. When bodies move so fast that the swept test leaves no joint placement (a nod of
+    // pi/2 at 20 Hz moves the torso 0.25 m in a substep), the placements are tried again without it: the
+    // ends still land outside every body.
     bool found = false;
-    for (int k = 0; k <= 64 && !found; ++k) {
-      place(((k + 1) / 2) * (k % 2 ? 1.0 : -1.0) / 32.0);
-      found = !rowOutsideBand(strip, r) && clear();
+    for (int candidate = -1; !found; ++candidate) {
+      if (candidate == s.columns) {
+        if (level == 1 || before.empty()) break;
+        level = 1;
+        candidate = -1;
+      }
+      const Vec3 m = candidate < 0 ? mean : row_dirs_[static_cast<std::size_t>(candidate)];
+      if (m.norm() < 1e-9) continue;
+      for (int k = 0; k <= 64 && !found; ++k)
+        found =
+            place(m.normalized(), ((k + 1) / 2) * (k % 2 ? 1.0 : -1.0) / 32.0) && !rowOutsideBand(strip, r);
     }
     if (found) continue;
-    for (int c = 0; c < s.columns; ++c) {  // back to what the passes left
+    for (int c = 0; c < s.columns; ++c) {  // back to what the passes left (cleared of the bodies above)
       direction_[at(c)] = row_dirs_[static_cast<std::size_t>(c)];
       positions_[at(c)] = pivotOf(c) + length_[at(c)] * direction_[at(c)];
     }
+    // A body keeps the ends of this row from closing in far enough from where the row above put its
+    // pivots (a strip draped over a body, its rest width narrowing toward the tips): the row above is
+    // held to this row's far edge too, so that parallel segments meet it here, and both are placed again.
+    const std::size_t above = static_cast<std::size_t>(r - 1);
+    if (r >= 2 && tighten_to_[above] < tighten_to_[static_cast<std::size_t>(r)]) {
+      tighten_to_[above] = tighten_to_[static_cast<std::size_t>(r)];
+      r -= 2;  // the loop's ++r: row r - 1 again
+    }
   }
+  tighten_to_.clear();
   collisions_ = saved_collisions;  // the sweep counted the segments turned out of a body
   const double dt = params_.substep;
   for (int r = 1; r < s.rows; ++r)

@@ -149,10 +149,20 @@ class Simulator {
   /// segment not cutting through it, the end's path over the substep not entering it?
   bool clearOf(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
                bool have_before) const;
+  /// clearOf for every near body.
+  bool clearOfAll(double d, const Vec3& u, const std::vector<Ellipsoid>& now, bool have_before) const;
+  /// The bodies' part of resolveCollisions (prepareBodies first): dir when the segment is clear of every
+  /// near body, else the nearest clear direction found by escapeBodies, with the swept test and then the
+  /// segment test dropped when no direction passes them all (the end outside every body comes first).
+  /// first_level 1 starts without the swept test.
+  Vec3 clearBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
+                   bool have_before, int first_level = 0);
   /// Is some within-strip pair of the strip outside the band [proximity, far] x rest length?
   bool stripOutsideBand(std::size_t strip) const;
   /// The same for the pairs of one row of the strip.
   bool rowOutsideBand(std::size_t strip, int row) const;
+  /// Rest length of the within-strip pair (i, j), or fallback when they are not paired.
+  double withinRest(std::size_t i, std::size_t j, double fallback) const;
   /// Gauss-Seidel passes over a strip whose band does not hold after the sweep: every segment again
   /// through resolveCollisions from its (possibly moved) pivot, now with every partner in the strip
   /// already moved, so that each pair is kept from both ends. Then rates and velocities are
@@ -191,6 +201,8 @@ class Simulator {
   /// clearOf's tests: 0 all, 1 without the swept test, 2 the end point alone (resolveCollisions' fallbacks).
   int clear_level_ = 0;
   std::vector<Vec3> row_dirs_;  ///< relaxStrip: a row's directions before the parallel fallback
+  /// relaxStrip: row r's far edge is the narrowest of rows r..tighten_to_[r] (empty: each row its own).
+  std::vector<int> tighten_to_;
   // The current strip at the start of the substep (positions, directions, segment midpoints).
   std::vector<Vec3> start_pos_, start_dir_, start_mid_;
   std::vector<int> partner_start_;  ///< CSR: partners of point k are [start[k], start[k+1])
