@@ -14,8 +14,10 @@
 ///
 /// Checked at every substep (OfflineRunner at 240 frames a second: each frame is a substep):
 ///   all control points finite; max_penetration_m <= 1e-9; the strip width band: the largest
-///   within-strip spring distance / rest length <= springs.far_factor (+1e-9) (with --band report the
-///   breaches are listed in band_episodes but do not fail the run); the kinetic energy of the hair
+///   within-strip spring distance / rest length <= springs.far_factor (+1e-9) while no input at the
+///   validation's limits (nor a violent head key) acts (under those the bodies, which keep the last word,
+///   may hold a strip open: listed in band_episodes, not a failure; with --band report no breach fails
+///   the run); the kinetic energy of the hair
 ///   relative to the head <= the bound below.
 /// Every --check-every seconds: every segment's length within 1e-6 of its rest length (relative), and
 /// the resident set size (/proc/self/statm), which must not grow by more than 4 MiB after the first check
@@ -27,10 +29,15 @@
 /// most max_angle_step per substep, so a point at arc length s_k from the root moves at most
 /// s_k max_angle_step / dt relative to the head. Pushed motion: a body fixed in the world moves, in the
 /// head frame, at most at u = |v_head| + |omega_head| * reach (reach: its farthest point from the head
-/// origin), and the hair it pushes follows it. So at each substep
+/// origin), and the hair it pushes follows it, the points a body pushed in one substep and the columns
+/// the band ties to them in that substep or the next (the band is kept against the partners' final
+/// positions, and a strip that a push left outside it is placed again in the next substep). So, with u the
+/// larger of this substep's and the last one's, at each substep
 ///     KE_rel <= sum_k 1/2 m_k (s_k max_angle_step / dt + u)^2.
 /// It is an estimate of the energy the inputs can drive, not a proof: the band and collision corrections
 /// can move single points faster (max_speed_over_cap in the summary says by how much), the sum has held.
+/// (Until 2026-11-23 u was this substep's alone; a head key that turned the head 0.79 rad in one substep
+/// at t = 623.11 s of seed 1 then left the strips whipping at up to 69 m/s in the next one, 8 % over.)
 /// With the head still and no wind for the last 20 s the hair must settle: KE below 1e-6 J in the last
 /// second.
 #include <unistd.h>
@@ -291,6 +298,17 @@ int main(int argc, char** argv) {
       ke_bound += 0.5 * mass[k] * bound_speed[k] * bound_speed[k];
     }
 
+    const EventSchedule schedule = g.scenario.schedule();
+    // Was an input at the validation's limits (or a violent head key) acting at t?
+    auto extremeAt = [&](double t) {
+      for (std::size_t i = 0; i < schedule.size(); ++i)
+        if (g.extreme[i] && schedule.event(i).start <= t && t <= schedule.end(i)) return true;
+      for (std::size_t i = 1; i < g.scenario.head.size(); ++i)
+        if (std::abs(g.scenario.head[i].t - t) < 0.3 && g.scenario.head[i].t - g.scenario.head[i - 1].t < 0.2)
+          return true;
+      return false;
+    };
+
     // Bodies in the world frame push the hair at their speed in the head frame: at most
     // |v_head| + |omega_head| * reach, reach = the farthest point of such a body from the head origin.
     std::vector<const Body*> world_bodies;
@@ -298,10 +316,10 @@ int main(int argc, char** argv) {
       if (b.frame != config.head_frame) world_bodies.push_back(&b);
     std::vector<Vec3> previous;
     Iso3 previous_head = Iso3::Identity();
-    double max_speed_ratio = 0.0, max_speed_ratio_t = 0.0, max_body_speed = 0.0;
+    double max_speed_ratio = 0.0, max_speed_ratio_t = 0.0, max_body_speed = 0.0, last_body_speed = 0.0;
     double max_ke = 0.0, max_ke_t = 0.0, max_pen = 0.0, max_len_err = 0.0, max_width = 0.0, max_width_t = 0.0;
     double ke_last_second = 0.0;
-    long substeps = 0, band_breaches = 0;
+    long substeps = 0, band_breaches = 0, band_breaches_ordinary = 0;
     bool all_finite = true;
     long rss_start = 0, rss_end = 0, rss_max = 0;
     double next_check = check_every;
@@ -337,8 +355,12 @@ int main(int argc, char** argv) {
         max_pen = std::max(max_pen, sim.maxPenetration());
         const double w = sim.maxSpringRatio(true);
         if (w > far + 1e-9) {
-          if (band_breaches == 0 && band_is_failure)
-            fail("width ratio " + formatDouble(w) + " > far_factor at t = " + formatDouble(f.t));
+          // Under inputs at the validation's limits the bodies, which keep the last word, may hold a strip
+          // open: reported (band_episodes), not a failure.
+          if (band_breaches_ordinary == 0 && band_is_failure && !extremeAt(f.t))
+            fail("width ratio " + formatDouble(w) + " > far_factor at t = " + formatDouble(f.t) +
+                 " with no input at the limits acting");
+          band_breaches_ordinary += !extremeAt(f.t);
           ++band_breaches;
           record(episodes, f.t, w);
         }
@@ -353,8 +375,10 @@ int main(int argc, char** argv) {
         for (const Body* b : world_bodies)
           reach = std::max(
               reach, (b->shape.center() - f.head_pose.translation()).norm() + b->shape.radii().maxCoeff());
-        const double body_speed = v_head.norm() + omega * reach;
-        max_body_speed = std::max(max_body_speed, body_speed);
+        const double body_speed_now = v_head.norm() + omega * reach;
+        max_body_speed = std::max(max_body_speed, body_speed_now);
+        const double body_speed = std::max(body_speed_now, last_body_speed);
+        last_body_speed = body_speed_now;
         double ke = 0.0, bound = 0.0;
         for (std::size_t k = 0; k < x.size(); ++k) {
           const double speed = (x[k] - previous[k]).norm() / dt, cap = bound_speed[k] + body_speed;
@@ -412,11 +436,9 @@ int main(int argc, char** argv) {
       fail("the hair did not settle: " + formatDouble(ke_last_second) + " J in the last second");
     if (!summary.all_finite) fail("the runner saw non-finite points");
 
-    // The events acting at a time, and whether a violent head key is within 0.3 s.
     // The events acting at a time (open-ended ones until the next of their type takes over, as the
     // schedule has it; the schedule keeps the scenario's order, which is by start), and any violent head
     // key within 0.3 s.
-    const EventSchedule schedule = g.scenario.schedule();
     auto acting = [&](double t) {
       std::string out = "[";
       for (std::size_t i = 0; i < schedule.size(); ++i) {
@@ -454,15 +476,6 @@ int main(int argc, char** argv) {
       << ", \"max_width_ratio_t\": " << formatDouble(max_width_t)
       << ", \"substeps_outside_band\": " << band_breaches;
     // The worst ten episodes of each kind, with what was acting then.
-    // Was an input at the validation's limits (or a violent head key) acting at t?
-    auto extremeAt = [&](double t) {
-      for (std::size_t i = 0; i < schedule.size(); ++i)
-        if (g.extreme[i] && schedule.event(i).start <= t && t <= schedule.end(i)) return true;
-      for (std::size_t i = 1; i < g.scenario.head.size(); ++i)
-        if (std::abs(g.scenario.head[i].t - t) < 0.3 && g.scenario.head[i].t - g.scenario.head[i - 1].t < 0.2)
-          return true;
-      return false;
-    };
     auto listEpisodes = [&](const char* name, const char* value, std::vector<Episode> list) {
       long ordinary = 0;
       double ordinary_max = 0.0;
