@@ -118,7 +118,8 @@ Generated generate(double seconds, std::uint64_t seed) {
     g.extreme_head_keys += violent;
     s.head.push_back(k);
   }
-  s.head.push_back({std::max(t, active_end - 1.0), rest, Vec3::Zero()});
+  // Back to rest 1 s before the calm (every key above is earlier: the loop stops at the first t past it).
+  s.head.push_back({active_end - 1.0, rest, Vec3::Zero()});
   s.head.push_back({active_end, rest, Vec3::Zero()});
   // Events: one every ~4 s, uniform over the types.
   for (double start = rng.uniform(0.5, 4.0); start < active_end - 2.0; start += rng.uniform(0.5, 7.5)) {
