@@ -456,7 +456,35 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
   q_pivot_.resize(nb);
   q_prev_.resize(nb);
   pivot_inside_.resize(nb);
+  // First a test in the head frame without the sphere-space maps: with D the distance from the pivot to
+  // the centre of the ball of radius R that holds the body, every end and segment lies within d of the
+  // pivot, and the path of the previous end, seen from the moving body, runs from p' = M (prev - c_before)
+  // + c_now (M = S_now Sinv_before) to the end, where |p' - pivot| <= a + shift + motion (a + D + shift)
+  // with a = |prev - pivot|. So the body is out of reach when D > R + d and D (1 - motion) > R + (a +
+  // shift)(1 + motion) (compared on squares); R keeps a relative 1e-6 and 1 um to spare.
+  const bool quick = bounds_ != nullptr && bounds_->size() == nb;
+  const double a = (quick && !before.empty()) ? (previous_end - pivot).norm() : 0.0;
   for (std::size_t b = 0; b < nb; ++b) {
+    if (quick) {
+      const BodyBound& bound = (*bounds_)[b];
+      const double dist2 = (pivot - bound.centre).squaredNorm();
+      const double reach = bound.radius + d;
+      if (dist2 > reach * reach) {
+        bool far = true;
+        if (!before.empty()) {
+          far = bound.motion < 0.5;
+          if (far) {
+            const double lim = bound.radius + (a + bound.shift) * (1.0 + bound.motion);
+            const double keep = 1.0 - bound.motion;
+            far = dist2 * (keep * keep) > lim * lim;
+          }
+        }
+        if (far) {
+          pivot_inside_[b] = 0;
+          continue;
+        }
+      }
+    }
     const Vec3 qp = now[b].toSphere(pivot);
     q_pivot_[b] = qp;
     const double n2 = qp.squaredNorm();
@@ -875,6 +903,9 @@ void Simulator::step(const StepInputs& in) {
   const Vec3 alpha = Rt * in.head.angular_acceleration;
   const Vec3 air0 = Rt * (in.wind - in.head.linear_velocity);  // air velocity at the head origin, head frame
   double max_rate = 0.0;
+  // Largest squared rate of the sweeps (sqrt and / dt are monotonic: max_rate is taken from it at the end).
+  double max_rate2 = 0.0;
+  const double lo_band = params_.spring_proximity_factor, hi_band = params_.spring_far_factor;
   const double k_c = params_.collision_stiffness, c_c = params_.collision_damping;
   collisions_ = 0;
   double max_penetration = 0.0;
@@ -886,6 +917,26 @@ void Simulator::step(const StepInputs& in) {
   }
   if (!springs_.empty()) computeSpringForces();
   static const std::vector<Ellipsoid> kNone;
+  if (!bodies_.empty()) {
+    body_bounds_.resize(margins_.size());
+    for (std::size_t m = 0; m < margins_.size(); ++m) {
+      const std::vector<Ellipsoid>& now = bodies_now_[m];
+      std::vector<BodyBound>& bounds = body_bounds_[m];
+      bounds.resize(now.size());
+      for (std::size_t b = 0; b < now.size(); ++b) {
+        BodyBound& bound = bounds[b];
+        bound.centre = now[b].center();
+        bound.radius = now[b].radii().maxCoeff() * (1.0 + 1e-6) + 1e-6;
+        bound.motion = 1.0;
+        bound.shift = 0.0;
+        if (have_bodies_before_ && m < bodies_before_.size() && b < bodies_before_[m].size()) {
+          const Ellipsoid& before = bodies_before_[m][b];
+          bound.motion = (now[b].S() * before.Sinv() - Mat3::Identity()).norm();
+          bound.shift = (now[b].center() - before.center()).norm();
+        }
+      }
+    }
+  }
 
   int offset = 0;
   for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
@@ -896,10 +947,17 @@ void Simulator::step(const StepInputs& in) {
         (bodies_.empty() || !have_bodies_before_)
             ? kNone
             : bodies_before_[static_cast<std::size_t>(margin_of_strip_[si])];
-    const auto first = positions_.begin() + offset;
-    start_pos_.assign(first, first + s.pointCount());
-    start_dir_.assign(direction_.begin() + offset, direction_.begin() + offset + s.pointCount());
-    start_mid_.assign(previous_mid_.begin() + offset, previous_mid_.begin() + offset + s.pointCount());
+    bounds_ = bodies_.empty() ? nullptr : &body_bounds_[static_cast<std::size_t>(margin_of_strip_[si])];
+    // The strip at the start of the substep for relaxStrip (rows >= 1, filled as the sweep moves them).
+    const std::size_t count = static_cast<std::size_t>(s.pointCount());
+    if (start_pos_.size() < count) {
+      start_pos_.resize(count);
+      start_dir_.resize(count);
+      start_mid_.resize(count);
+    }
+    // The within-strip band (stripOutsideBand), checked as the sweep places the later point of each pair.
+    const bool check_band = params_.springs_within_strips;
+    bool outside_band = false;
     for (int c = 0; c < s.columns; ++c) {
       Mat3 Q = Mat3::Identity();  // rotation of the parent segment from its styled frame
       std::size_t parent = static_cast<std::size_t>(offset + s.index(0, c));
@@ -911,6 +969,10 @@ void Simulator::step(const StepInputs& in) {
         const Vec3 n = direction_[i];
         const Vec3 mid = pivot + 0.5 * d * n;
         const Vec3& v = velocity_[i];  // midpoint velocity relative to the head over the last substep
+        const std::size_t local = i - static_cast<std::size_t>(offset);
+        start_pos_[local] = positions_[i];
+        start_dir_[local] = n;
+        start_mid_[local] = previous_mid_[i];
         // (6): F = rho d (g + a) + d f with the fictitious acceleration a of the head frame
         // (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the hair.
         const Vec3 a = -acc0 - alpha.cross(mid) - omega.cross(omega.cross(mid)) - 2.0 * omega.cross(v);
@@ -963,11 +1025,25 @@ void Simulator::step(const StepInputs& in) {
         }
         // The rotation of this substep: w itself unless a limit or a constraint moved the end.
         if (next != free_next) w = rotationVectorBetween(n, next);
-        max_rate = std::max(max_rate, w.norm() / dt);
+        max_rate2 = std::max(max_rate2, w.squaredNorm());
         rate_[i] = w;
         direction_[i] = next;
         positions_[i] = pivot + d * next;
         moved_in_step_[i] = steps_;
+        if (check_band && !outside_band) {
+          // rowOutsideBand's test for the pairs whose other point is already in place.
+          for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
+            const double rest = partner_rest_[static_cast<std::size_t>(q)];
+            if (rest <= 0.0) continue;  // between strips
+            const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
+            if (moved_in_step_[j] != steps_) continue;  // kept when j is placed
+            const double dist = (positions_[i] - positions_[j]).norm();
+            if (dist > hi_band * rest * (1.0 + 1e-9) || dist < lo_band * rest) {
+              outside_band = true;
+              break;
+            }
+          }
+        }
         const Vec3 mid_next = pivot + 0.5 * d * next;
         velocity_[i] = (mid_next - previous_mid_[i]) / dt;
         previous_mid_[i] = mid_next;
@@ -976,7 +1052,7 @@ void Simulator::step(const StepInputs& in) {
         parent = i;
       }
     }
-    if (params_.springs_within_strips && stripOutsideBand(si)) {
+    if (outside_band) {
       relaxStrip(si, bodies_now, bodies_before);
       for (int p = s.columns; p < s.pointCount(); ++p) {
         const std::size_t i = static_cast<std::size_t>(offset + p);
@@ -988,7 +1064,8 @@ void Simulator::step(const StepInputs& in) {
     }
     offset += s.pointCount();
   }
-  max_rate_ = max_rate;
+  bounds_ = nullptr;
+  max_rate_ = std::max(max_rate, std::sqrt(max_rate2) / dt);
   max_penetration_ = max_penetration;
   penetrations_ = penetrations;
   if (!bodies_.empty()) {
