@@ -452,10 +452,13 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
   // max(d / smallest radius, |q_prev - q_pivot|)) lies outside the unit sphere: then nothing below
   // can fail for it, and it is skipped.
   near_.clear();
-  is_near_.assign(nb, 0);
-  q_pivot_.resize(nb);
-  q_prev_.resize(nb);
-  pivot_inside_.resize(nb);
+  if (is_near_.size() != nb) {  // every entry is set below
+    is_near_.resize(nb);
+    q_pivot_.resize(nb);
+    q_prev_.resize(nb);
+    pivot_inside_.resize(nb);
+    near_.reserve(nb);
+  }
   // First a test in the head frame without the sphere-space maps: with D the distance from the pivot to
   // the centre of the ball of radius R that holds the body, every end and segment lies within d of the
   // pivot, and the path of the previous end, seen from the moving body, runs from p' = M (prev - c_before)
@@ -481,6 +484,7 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
         }
         if (far) {
           pivot_inside_[b] = 0;
+          is_near_[b] = 0;
           continue;
         }
       }
@@ -500,9 +504,9 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
         far = (q_prev_[b] - qp).squaredNorm() < spare * spare;
       }
     }
+    is_near_[b] = far ? 0 : 1;
     if (far) continue;
     near_.push_back(b);
-    is_near_[b] = 1;
   }
 }
 
