@@ -24,8 +24,25 @@ Vec3 anyPerpendicular(const Vec3& a) {
 
 Vec3 rotationVectorBetween(const Vec3& a, const Vec3& b) {
   const Vec3 axis = a.cross(b);
-  const double s = axis.norm();
   const double c = a.dot(b);
+  const double s2 = axis.squaredNorm();
+  // Small angles (the hinges, a substep's turn): angle / s = atan(x) / (x c) with x = s / c < 0.1, the
+  // series of atan(x) / x in x^2 to x^16 (the first term left out, x^18 / 19, is below 6e-20): no
+  // square root and no atan2.
+  if (c > 0.0 && s2 > 1e-24 && s2 < 0.01 * (c * c)) {
+    const double x2 = s2 / (c * c);
+    double p = 1.0 / 17.0;
+    p = p * x2 - 1.0 / 15.0;
+    p = p * x2 + 1.0 / 13.0;
+    p = p * x2 - 1.0 / 11.0;
+    p = p * x2 + 1.0 / 9.0;
+    p = p * x2 - 1.0 / 7.0;
+    p = p * x2 + 1.0 / 5.0;
+    p = p * x2 - 1.0 / 3.0;
+    p = p * x2 + 1.0;
+    return axis * (p / c);
+  }
+  const double s = std::sqrt(s2);
   const double angle = std::atan2(s, c);
   if (s > 1e-12) return axis * (angle / s);
   if (c > 0.0) return Vec3::Zero();
@@ -33,8 +50,26 @@ Vec3 rotationVectorBetween(const Vec3& a, const Vec3& b) {
 }
 
 Vec3 rotateByVector(const Vec3& w, const Vec3& v) {
-  const double angle = w.norm();
-  if (angle < 1e-12) return v + w.cross(v);
+  const double a2 = w.squaredNorm();
+  if (a2 < 1e-24) return v + w.cross(v);
+  if (a2 < 0.01) {
+    // Small angles (a substep's turn): v cos + (w x v) sin(a) / a + w (w.v) (1 - cos) / a^2 with the three
+    // series in a^2 < 0.01 to a^10 (the terms left out are below 2e-21): no square root, no sin or cos,
+    // and no cancellation in 1 - cos.
+    const double c =
+        1.0 + a2 * (-1.0 / 2.0 +
+                    a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0 + a2 * (-1.0 / 3628800.0)))));
+    const double sa =
+        1.0 +
+        a2 * (-1.0 / 6.0 +
+              a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0 + a2 * (1.0 / 362880.0 + a2 * (-1.0 / 39916800.0)))));
+    const double ca =
+        0.5 +
+        a2 * (-1.0 / 24.0 + a2 * (1.0 / 720.0 + a2 * (-1.0 / 40320.0 +
+                                                      a2 * (1.0 / 3628800.0 + a2 * (-1.0 / 479001600.0)))));
+    return v * c + w.cross(v) * sa + w * (w.dot(v) * ca);
+  }
+  const double angle = std::sqrt(a2);
   const Vec3 k = w / angle;
   const double c = std::cos(angle);
   const double s = std::sin(angle);
@@ -417,11 +452,43 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
   // max(d / smallest radius, |q_prev - q_pivot|)) lies outside the unit sphere: then nothing below
   // can fail for it, and it is skipped.
   near_.clear();
-  is_near_.assign(nb, 0);
-  q_pivot_.resize(nb);
-  q_prev_.resize(nb);
-  pivot_inside_.resize(nb);
+  if (is_near_.size() != nb) {  // every entry is set below
+    is_near_.resize(nb);
+    q_pivot_.resize(nb);
+    q_prev_.resize(nb);
+    pivot_inside_.resize(nb);
+    near_.reserve(nb);
+  }
+  // First a test in the head frame without the sphere-space maps: with D the distance from the pivot to
+  // the centre of the ball of radius R that holds the body, every end and segment lies within d of the
+  // pivot, and the path of the previous end, seen from the moving body, runs from p' = M (prev - c_before)
+  // + c_now (M = S_now Sinv_before) to the end, where |p' - pivot| <= a + shift + motion (a + D + shift)
+  // with a = |prev - pivot|. So the body is out of reach when D > R + d and D (1 - motion) > R + (a +
+  // shift)(1 + motion) (compared on squares); R keeps a relative 1e-6 and 1 um to spare.
+  const bool quick = bounds_ != nullptr && bounds_->size() == nb;
+  const double a = (quick && !before.empty()) ? (previous_end - pivot).norm() : 0.0;
   for (std::size_t b = 0; b < nb; ++b) {
+    if (quick) {
+      const BodyBound& bound = (*bounds_)[b];
+      const double dist2 = (pivot - bound.centre).squaredNorm();
+      const double reach = bound.radius + d;
+      if (dist2 > reach * reach) {
+        bool far = true;
+        if (!before.empty()) {
+          far = bound.motion < 0.5;
+          if (far) {
+            const double lim = bound.radius + (a + bound.shift) * (1.0 + bound.motion);
+            const double keep = 1.0 - bound.motion;
+            far = dist2 * (keep * keep) > lim * lim;
+          }
+        }
+        if (far) {
+          pivot_inside_[b] = 0;
+          is_near_[b] = 0;
+          continue;
+        }
+      }
+    }
     const Vec3 qp = now[b].toSphere(pivot);
     q_pivot_[b] = qp;
     const double n2 = qp.squaredNorm();
@@ -437,9 +504,9 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
         far = (q_prev_[b] - qp).squaredNorm() < spare * spare;
       }
     }
+    is_near_[b] = far ? 0 : 1;
     if (far) continue;
     near_.push_back(b);
-    is_near_[b] = 1;
   }
 }
 
@@ -840,6 +907,9 @@ void Simulator::step(const StepInputs& in) {
   const Vec3 alpha = Rt * in.head.angular_acceleration;
   const Vec3 air0 = Rt * (in.wind - in.head.linear_velocity);  // air velocity at the head origin, head frame
   double max_rate = 0.0;
+  // Largest squared rate of the sweeps (sqrt and / dt are monotonic: max_rate is taken from it at the end).
+  double max_rate2 = 0.0;
+  const double lo_band = params_.spring_proximity_factor, hi_band = params_.spring_far_factor;
   const double k_c = params_.collision_stiffness, c_c = params_.collision_damping;
   collisions_ = 0;
   double max_penetration = 0.0;
@@ -851,6 +921,26 @@ void Simulator::step(const StepInputs& in) {
   }
   if (!springs_.empty()) computeSpringForces();
   static const std::vector<Ellipsoid> kNone;
+  if (!bodies_.empty()) {
+    body_bounds_.resize(margins_.size());
+    for (std::size_t m = 0; m < margins_.size(); ++m) {
+      const std::vector<Ellipsoid>& now = bodies_now_[m];
+      std::vector<BodyBound>& bounds = body_bounds_[m];
+      bounds.resize(now.size());
+      for (std::size_t b = 0; b < now.size(); ++b) {
+        BodyBound& bound = bounds[b];
+        bound.centre = now[b].center();
+        bound.radius = now[b].radii().maxCoeff() * (1.0 + 1e-6) + 1e-6;
+        bound.motion = 1.0;
+        bound.shift = 0.0;
+        if (have_bodies_before_ && m < bodies_before_.size() && b < bodies_before_[m].size()) {
+          const Ellipsoid& before = bodies_before_[m][b];
+          bound.motion = (now[b].S() * before.Sinv() - Mat3::Identity()).norm();
+          bound.shift = (now[b].center() - before.center()).norm();
+        }
+      }
+    }
+  }
 
   int offset = 0;
   for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
@@ -861,10 +951,17 @@ void Simulator::step(const StepInputs& in) {
         (bodies_.empty() || !have_bodies_before_)
             ? kNone
             : bodies_before_[static_cast<std::size_t>(margin_of_strip_[si])];
-    const auto first = positions_.begin() + offset;
-    start_pos_.assign(first, first + s.pointCount());
-    start_dir_.assign(direction_.begin() + offset, direction_.begin() + offset + s.pointCount());
-    start_mid_.assign(previous_mid_.begin() + offset, previous_mid_.begin() + offset + s.pointCount());
+    bounds_ = bodies_.empty() ? nullptr : &body_bounds_[static_cast<std::size_t>(margin_of_strip_[si])];
+    // The strip at the start of the substep for relaxStrip (rows >= 1, filled as the sweep moves them).
+    const std::size_t count = static_cast<std::size_t>(s.pointCount());
+    if (start_pos_.size() < count) {
+      start_pos_.resize(count);
+      start_dir_.resize(count);
+      start_mid_.resize(count);
+    }
+    // The within-strip band (stripOutsideBand), checked as the sweep places the later point of each pair.
+    const bool check_band = params_.springs_within_strips;
+    bool outside_band = false;
     for (int c = 0; c < s.columns; ++c) {
       Mat3 Q = Mat3::Identity();  // rotation of the parent segment from its styled frame
       std::size_t parent = static_cast<std::size_t>(offset + s.index(0, c));
@@ -876,6 +973,10 @@ void Simulator::step(const StepInputs& in) {
         const Vec3 n = direction_[i];
         const Vec3 mid = pivot + 0.5 * d * n;
         const Vec3& v = velocity_[i];  // midpoint velocity relative to the head over the last substep
+        const std::size_t local = i - static_cast<std::size_t>(offset);
+        start_pos_[local] = positions_[i];
+        start_dir_[local] = n;
+        start_mid_[local] = previous_mid_[i];
         // (6): F = rho d (g + a) + d f with the fictitious acceleration a of the head frame
         // (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the hair.
         const Vec3 a = -acc0 - alpha.cross(mid) - omega.cross(omega.cross(mid)) - 2.0 * omega.cross(v);
@@ -928,11 +1029,25 @@ void Simulator::step(const StepInputs& in) {
         }
         // The rotation of this substep: w itself unless a limit or a constraint moved the end.
         if (next != free_next) w = rotationVectorBetween(n, next);
-        max_rate = std::max(max_rate, w.norm() / dt);
+        max_rate2 = std::max(max_rate2, w.squaredNorm());
         rate_[i] = w;
         direction_[i] = next;
         positions_[i] = pivot + d * next;
         moved_in_step_[i] = steps_;
+        if (check_band && !outside_band) {
+          // rowOutsideBand's test for the pairs whose other point is already in place.
+          for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
+            const double rest = partner_rest_[static_cast<std::size_t>(q)];
+            if (rest <= 0.0) continue;  // between strips
+            const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
+            if (moved_in_step_[j] != steps_) continue;  // kept when j is placed
+            const double dist = (positions_[i] - positions_[j]).norm();
+            if (dist > hi_band * rest * (1.0 + 1e-9) || dist < lo_band * rest) {
+              outside_band = true;
+              break;
+            }
+          }
+        }
         const Vec3 mid_next = pivot + 0.5 * d * next;
         velocity_[i] = (mid_next - previous_mid_[i]) / dt;
         previous_mid_[i] = mid_next;
@@ -941,7 +1056,7 @@ void Simulator::step(const StepInputs& in) {
         parent = i;
       }
     }
-    if (params_.springs_within_strips && stripOutsideBand(si)) {
+    if (outside_band) {
       relaxStrip(si, bodies_now, bodies_before);
       for (int p = s.columns; p < s.pointCount(); ++p) {
         const std::size_t i = static_cast<std::size_t>(offset + p);
@@ -953,7 +1068,8 @@ void Simulator::step(const StepInputs& in) {
     }
     offset += s.pointCount();
   }
-  max_rate_ = max_rate;
+  bounds_ = nullptr;
+  max_rate_ = std::max(max_rate, std::sqrt(max_rate2) / dt);
   max_penetration_ = max_penetration;
   penetrations_ = penetrations;
   if (!bodies_.empty()) {

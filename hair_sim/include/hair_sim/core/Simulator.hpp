@@ -212,6 +212,18 @@ class Simulator {
   std::vector<int> partner_start_;  ///< CSR: partners of point k are [start[k], start[k+1])
   std::vector<int> partner_index_;
   std::vector<double> partner_rest_;
+  /// prepareBodies' quick reject of a body in the head frame, before its sphere-space test: a ball about
+  /// its centre that holds it, and how far the body's motion over the substep carries a point near it.
+  struct BodyBound {
+    Vec3 centre = Vec3::Zero();
+    double radius = 0.0;  ///< largest radius, with a little to spare
+    double motion =
+        1.0;  ///< |S_now Sinv_before - I| (Frobenius): a point's displacement per metre from the centre
+    double shift = 0.0;  ///< |centre now - centre before|
+  };
+  /// Per distinct margin, this substep's bounds (filled in step()); bounds_ is the current strip's, or none.
+  std::vector<std::vector<BodyBound>> body_bounds_;
+  const std::vector<BodyBound>* bounds_ = nullptr;
   // Bodies in the head frame, per distinct margin, now and at the previous substep.
   std::vector<std::vector<Ellipsoid>> bodies_now_;
   std::vector<std::vector<Ellipsoid>> bodies_before_;
