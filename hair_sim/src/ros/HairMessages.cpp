@@ -25,11 +25,10 @@ geometry_msgs::Point toPoint(const Vec3& p) {
   return q;
 }
 
-hair_sim_msgs::HairState makeHairState(const Simulator& simulator, const std::vector<Vec3>& world_points,
-                                       const std::string& frame, const ros::Time& stamp) {
+void fillHairState(const Simulator& simulator, const std::vector<Vec3>& world_points,
+                   const std::string& frame, const ros::Time& stamp, hair_sim_msgs::HairState& state) {
   const std::vector<int>& offsets = simulator.stripOffsets();
   const auto& strips = simulator.hairstyle().strips;
-  hair_sim_msgs::HairState state;
   state.header.stamp = stamp;
   state.header.frame_id = frame;
   state.step = static_cast<std::uint64_t>(simulator.stepCount());
@@ -40,10 +39,22 @@ hair_sim_msgs::HairState makeHairState(const Simulator& simulator, const std::ve
     out.rows = static_cast<std::uint32_t>(strips[s].rows);
     out.hair_length = strips[s].hair_length;
     out.color = toColor(strips[s].color);
-    out.points.reserve(static_cast<std::size_t>(strips[s].pointCount()));
-    for (int p = 0; p < strips[s].pointCount(); ++p)
-      out.points.push_back(toPoint(world_points[static_cast<std::size_t>(offsets[s] + p)]));
+    const std::size_t n = static_cast<std::size_t>(strips[s].pointCount());
+    out.xyz.resize(3 * n);
+    const Vec3* in = world_points.data() + offsets[s];
+    float* xyz = out.xyz.data();
+    for (std::size_t p = 0; p < n; ++p) {
+      xyz[3 * p] = static_cast<float>(in[p].x());
+      xyz[3 * p + 1] = static_cast<float>(in[p].y());
+      xyz[3 * p + 2] = static_cast<float>(in[p].z());
+    }
   }
+}
+
+hair_sim_msgs::HairState makeHairState(const Simulator& simulator, const std::vector<Vec3>& world_points,
+                                       const std::string& frame, const ros::Time& stamp) {
+  hair_sim_msgs::HairState state;
+  fillHairState(simulator, world_points, frame, stamp, state);
   return state;
 }
 
