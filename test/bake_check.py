@@ -71,12 +71,12 @@ def main():
     # The last hair_state equals the last frame of the CSV (same run, same order).
     with open(csv_path) as f:
         rows = [r for r in csv.DictReader(f) if abs(float(r['t']) - 1.0) < 1e-9]
-    points = [p for s in last_state.strips for p in s.points]
+    points = [tuple(s.xyz[i:i + 3]) for s in last_state.strips for i in range(0, len(s.xyz), 3)]
     check(len(points) == len(rows) == 1000, '%d points in hair_state, %d in the CSV' % (len(points), len(rows)))
-    # CSV rows go strip by strip, row by row, column by column: the order of StripState.points.
-    worst = max(math.dist((p.x, p.y, p.z), (float(r['x']), float(r['y']), float(r['z']))) for p, r in zip(points, rows))
+    # CSV rows go strip by strip, row by row, column by column: the order of StripState.xyz (float32).
+    worst = max(math.dist(p, (float(r['x']), float(r['y']), float(r['z']))) for p, r in zip(points, rows))
     check(worst < 1e-6, 'hair_state and CSV differ by %.3g m' % worst)
-    check(all(math.isfinite(v) for p in points for v in (p.x, p.y, p.z)), 'non-finite control point')
+    check(all(math.isfinite(v) for p in points for v in p), 'non-finite control point')
 
     # Progress bar on a terminal: a run that takes well over a second (40 s simulated), under script(1).
     long_scenario = os.path.join(work, 'long.yaml')

@@ -33,10 +33,10 @@ NAME = 'event_checks'
 def mean_tip(state):
     xs, ys, zs = [], [], []
     for strip in state.strips:
-        for p in strip.points[-strip.columns:]:  # last row
-            xs.append(p.x)
-            ys.append(p.y)
-            zs.append(p.z)
+        tips = strip.xyz[-3 * strip.columns:]  # last row: x, y, z per point
+        xs.extend(tips[0::3])
+        ys.extend(tips[1::3])
+        zs.extend(tips[2::3])
     return (sum(xs) / len(xs), sum(ys) / len(ys), sum(zs) / len(zs))
 
 

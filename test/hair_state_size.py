@@ -76,9 +76,8 @@ class HairStateSize(unittest.TestCase):
             colour = (got.color.r, got.color.g, got.color.b, got.color.a)
             for c, w in zip(colour, want['color']):
                 self.assertAlmostEqual(c, float(w), delta=COLOUR_TOLERANCE, msg='strip %d colour' % i)
-            self.assertEqual(len(got.points), got.columns * got.rows, 'strip %d' % i)
-            for p in got.points:
-                self.assertTrue(all(math.isfinite(v) for v in (p.x, p.y, p.z)), 'strip %d' % i)
+            self.assertEqual(len(got.xyz), 3 * got.columns * got.rows, 'strip %d' % i)
+            self.assertTrue(all(math.isfinite(v) for v in got.xyz), 'strip %d' % i)
 
     def test_b_state_much_smaller(self):
         sizes = {'hair_state': [], 'hair_markers': []}

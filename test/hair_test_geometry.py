@@ -1,8 +1,18 @@
 """Geometry shared by the hair_sim rostest scripts: rotations, rigid poses from tf, and the body
 ellipsoids of config/hair_sim.yaml (plain Python, no numpy on Debian's ROS install)."""
 
+import collections
 import math
 import time
+
+Point = collections.namedtuple('Point', 'x y z')
+
+
+def strip_points(strip):
+    """A hair_sim_msgs/StripState's control points (its xyz: float32 x, y, z per point, row-major) as
+    Point(x, y, z) tuples."""
+    v = strip.xyz
+    return [Point(v[i], v[i + 1], v[i + 2]) for i in range(0, len(v) - 2, 3)]
 
 
 def quat_to_matrix(x, y, z, w):

@@ -20,6 +20,7 @@ import sys
 import threading
 import time
 import unittest
+from collections import namedtuple
 
 import dynamic_reconfigure.client
 import rospy
@@ -28,6 +29,7 @@ from hair_sim_msgs.msg import HairState, Wind
 from visualization_msgs.msg import Marker, MarkerArray
 
 PKG = 'hair_sim'
+Point = namedtuple('Point', 'x y z')
 NAME = 'live_tuning'
 WIND = 3.0  # m/s along +x
 
@@ -61,7 +63,8 @@ class LiveTuning(unittest.TestCase):
         tips = []
         for s in state.strips:
             for c in range(s.columns):
-                tips.append(s.points[(s.rows - 1) * s.columns + c])
+                k = 3 * ((s.rows - 1) * s.columns + c)  # xyz: x, y, z per point
+                tips.append(Point(*s.xyz[k:k + 3]))
         return tips
 
     def mean_dx(self, rest):

@@ -54,7 +54,7 @@ except ImportError:  # pragma: no cover
 
 # Shared helpers (this folder is not on sys.path when catkin's relay runs the script).
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from hair_test_geometry import wait_until  # noqa: E402
+from hair_test_geometry import strip_points, wait_until  # noqa: E402
 
 PKG = 'hair_sim'
 NAME = 'robustness_checks'
@@ -196,7 +196,7 @@ class RobustnessChecks(unittest.TestCase):
         """Finite, near the head, roots where the head at `head` turned by `yaw` puts them."""
         roots = []
         for s, strip in enumerate(msg.strips):
-            for k, p in enumerate(strip.points):
+            for k, p in enumerate(strip_points(strip)):
                 v = (p.x, p.y, p.z)
                 self.assertTrue(all(map(math.isfinite, v)), 'strip %d point %d is %s' % (s, k, v))
                 d = math.sqrt(sum((a - b) ** 2 for a, b in zip(v, head)))
@@ -215,7 +215,7 @@ class RobustnessChecks(unittest.TestCase):
         out = []
         for strip in msg.strips:
             for c in range(strip.columns):
-                p = strip.points[(strip.rows - 1) * strip.columns + c]
+                p = strip_points(strip)[(strip.rows - 1) * strip.columns + c]
                 out.append(rotate_yaw((p.x - head[0], p.y - head[1], p.z - head[2]), -yaw))
         return out
 
@@ -324,7 +324,7 @@ class RobustnessChecks(unittest.TestCase):
         worst = 0.0
         for msg in after:
             # States stamped before the jump still show the head at home: compare each with its own head.
-            root = msg.strips[0].points[0]
+            root = strip_points(msg.strips[0])[0]
             jumped = abs(root.y - HOME[1] - self.root_offsets[0][1]) > TELEPORT / 2
             tips = self.tips(msg, far, TELEPORT_YAW) if jumped else self.tips(msg, HOME)
             worst = max(worst, max(math.sqrt(sum((a - b) ** 2 for a, b in zip(t, r)))

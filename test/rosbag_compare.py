@@ -30,7 +30,7 @@ MEAN_TOL = 0.001  # m
 
 def states(path):
     with rosbag.Bag(path) as bag:
-        return [(m.header.stamp.to_sec(), [(p.x, p.y, p.z) for s in m.strips for p in s.points])
+        return [(m.header.stamp.to_sec(), [tuple(s.xyz[i:i + 3]) for s in m.strips for i in range(0, len(s.xyz), 3)])
                 for _, m, _ in bag.read_messages(topics=['/hair_state'])]
 
 

@@ -52,9 +52,10 @@ class SimTimeBag(unittest.TestCase):
         # After each restart the hair is sane: every point finite and near the head (within 1 m).
         for m in self.states[-10:]:
             for strip in m.strips:
-                for p in strip.points:
-                    self.assertTrue(all(math.isfinite(v) for v in (p.x, p.y, p.z)))
-                    self.assertLess(math.sqrt(p.x ** 2 + p.y ** 2 + (p.z - 1.6) ** 2), 1.0)
+                v = strip.xyz  # x, y, z per point
+                for x, y, z in zip(v[0::3], v[1::3], v[2::3]):
+                    self.assertTrue(all(math.isfinite(c) for c in (x, y, z)))
+                    self.assertLess(math.sqrt(x ** 2 + y ** 2 + (z - 1.6) ** 2), 1.0)
         self.assertGreater(len(self.markers), 0)
         marker_stamp = self.markers[-1].markers[0].header.stamp.to_sec()
         self.assertTrue(self.bag_start - 1e-3 <= marker_stamp <= self.bag_end + 1e-3)

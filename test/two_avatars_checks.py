@@ -22,7 +22,7 @@ from hair_sim_msgs.msg import HairState
 
 # Shared geometry (this folder is not on sys.path when catkin's relay runs the script).
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from hair_test_geometry import Pose, mat_vec  # noqa: E402
+from hair_test_geometry import Pose, mat_vec, strip_points  # noqa: E402
 
 PKG = 'hair_sim'
 NAME = 'two_avatars_checks'
@@ -65,7 +65,7 @@ class TwoAvatars(unittest.TestCase):
                                                          rospy.Duration(5.0)))
             head = buffer.lookup_transform('world', '%s/head' % avatar, rospy.Time(0), rospy.Duration(5.0))
             points = [[a + b for a, b in zip(mat_vec(base.r, (p.x, p.y, p.z)), base.t)]
-                      for s in state.strips for p in s.points]
+                      for s in state.strips for p in strip_points(s)]
             centroid = [sum(p[i] for p in points) / len(points) for i in range(3)]
             h = head.transform.translation
             distance = sum((c - v) ** 2 for c, v in zip(centroid, (h.x, h.y, h.z))) ** 0.5

@@ -1,5 +1,6 @@
 #include "hair_sim/ros/HairMessages.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace hair_sim {
@@ -25,11 +26,10 @@ geometry_msgs::Point toPoint(const Vec3& p) {
   return q;
 }
 
-hair_sim_msgs::HairState makeHairState(const Simulator& simulator, const std::vector<Vec3>& world_points,
-                                       const std::string& frame, const ros::Time& stamp) {
+void fillHairState(const Simulator& simulator, const std::vector<Vec3>& world_points,
+                   const std::string& frame, const ros::Time& stamp, hair_sim_msgs::HairState& state) {
   const std::vector<int>& offsets = simulator.stripOffsets();
   const auto& strips = simulator.hairstyle().strips;
-  hair_sim_msgs::HairState state;
   state.header.stamp = stamp;
   state.header.frame_id = frame;
   state.step = static_cast<std::uint64_t>(simulator.stepCount());
@@ -40,67 +40,114 @@ hair_sim_msgs::HairState makeHairState(const Simulator& simulator, const std::ve
     out.rows = static_cast<std::uint32_t>(strips[s].rows);
     out.hair_length = strips[s].hair_length;
     out.color = toColor(strips[s].color);
-    out.points.reserve(static_cast<std::size_t>(strips[s].pointCount()));
-    for (int p = 0; p < strips[s].pointCount(); ++p)
-      out.points.push_back(toPoint(world_points[static_cast<std::size_t>(offsets[s] + p)]));
+    const std::size_t n = static_cast<std::size_t>(strips[s].pointCount());
+    out.xyz.resize(3 * n);
+    const Vec3* in = world_points.data() + offsets[s];
+    float* xyz = out.xyz.data();
+    for (std::size_t p = 0; p < n; ++p) {
+      xyz[3 * p] = static_cast<float>(in[p].x());
+      xyz[3 * p + 1] = static_cast<float>(in[p].y());
+      xyz[3 * p + 2] = static_cast<float>(in[p].z());
+    }
   }
+}
+
+hair_sim_msgs::HairState makeHairState(const Simulator& simulator, const std::vector<Vec3>& world_points,
+                                       const std::string& frame, const ros::Time& stamp) {
+  hair_sim_msgs::HairState state;
+  fillHairState(simulator, world_points, frame, stamp, state);
   return state;
 }
 
-visualization_msgs::MarkerArray makeHairMarkers(const HairMeshBuilder& meshes, RenderMode mode,
-                                                int strands_per_strip, const std::string& frame,
-                                                const ros::Time& stamp) {
-  visualization_msgs::MarkerArray array;
-  visualization_msgs::Marker base;
-  base.header.stamp = stamp;
-  base.header.frame_id = frame;
-  base.pose.orientation.w = 1.0;
-  base.scale.x = base.scale.y = base.scale.z = 1.0;
-  base.color.r = base.color.g = base.color.b = base.color.a = 1.0f;
-  base.action = visualization_msgs::Marker::ADD;
-  if (mode != RenderMode::Strands) {
-    // One merged TRIANGLE_LIST: every strip, both windings (both faces visible), per-vertex RGBA.
-    visualization_msgs::Marker m = base;
-    m.ns = "hair";
+void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands_per_strip,
+                     const std::string& frame, const ros::Time& stamp,
+                     visualization_msgs::MarkerArray& array) {
+  const std::size_t count = mode == RenderMode::Both ? 2 : 1;
+  array.markers.resize(count);
+  for (visualization_msgs::Marker& m : array.markers) {
+    m.header.stamp = stamp;
+    m.header.frame_id = frame;
+    m.pose = geometry_msgs::Pose();
+    m.pose.orientation.w = 1.0;
+    m.scale.x = m.scale.y = m.scale.z = 1.0;
+    m.color.r = m.color.g = m.color.b = m.color.a = 1.0f;
+    m.action = visualization_msgs::Marker::ADD;
     m.id = 0;
+  }
+  std::size_t next = 0;
+  if (mode != RenderMode::Strands) {
+    // One merged TRIANGLE_LIST: every strip, one winding, per-vertex RGBA. rviz 1.14's TriangleListMarker
+    // draws it with culling off and, given per-vertex colours, unlit (the normals it derives from the
+    // winding go unused): one winding shows both faces. The markers used to carry both windings, and
+    // translucent vertices (alpha < 1 makes rviz blend the whole list without depth writes) were then
+    // blended twice, one copy right after the other: alpha a drawn twice covers 1 - (1 - a)^2 = a (2 - a).
+    // One winding with that alpha looks the same (exactly at the vertices; between them rviz interpolates
+    // alpha linearly, which differs by at most (da)^2 / 4 along an edge whose ends differ by da).
+    visualization_msgs::Marker& m = array.markers[next++];
+    m.ns = "hair";
     m.type = visualization_msgs::Marker::TRIANGLE_LIST;
-    std::vector<std::uint32_t> indices;
-    std::size_t total = 0;  // sized once: the message holds tens of thousands of vertices
-    for (const StripMesh& mesh : meshes.meshes()) {
-      indices.clear();
-      Tessellator::appendTriangles(mesh, 0, true, indices);
-      total += indices.size();
-    }
-    m.points.reserve(total);
-    m.colors.reserve(total);
+    std::size_t total = 0;
+    for (const StripMesh& mesh : meshes.meshes())
+      total += 6 * static_cast<std::size_t>(std::max(mesh.n_u - 1, 0) * std::max(mesh.n_v - 1, 0));
+    // Resized in place: a reused message keeps its buffers (no allocation, no page faults).
+    m.points.resize(total);
+    m.colors.resize(total);
+    geometry_msgs::Point* point = m.points.data();
+    std_msgs::ColorRGBA* colour = m.colors.data();
     for (std::size_t s = 0; s < meshes.meshes().size(); ++s) {
       const StripMesh& mesh = meshes.meshes()[s];
-      const std::vector<Rgba>& colours = meshes.colours()[s];
-      indices.clear();
-      Tessellator::appendTriangles(mesh, 0, true, indices);
-      for (std::uint32_t k : indices) {
-        m.points.push_back(toPoint(mesh.positions[k]));
-        m.colors.push_back(toColor(colours[k]));
+      const Vec3* positions = mesh.positions.data();
+      const Rgba* colours = meshes.colours()[s].data();
+      const auto put = [&](int k) {
+        const Vec3& p = positions[k];
+        point->x = p.x();
+        point->y = p.y();
+        point->z = p.z();
+        ++point;
+        const Rgba& c = colours[k];
+        colour->r = c.r;
+        colour->g = c.g;
+        colour->b = c.b;
+        colour->a = c.a * (2.f - c.a);  // the coverage of the former two coincident layers (above)
+        ++colour;
+      };
+      // The triangles of Tessellator::appendTriangles (one winding), written without an index list.
+      for (int iv = 0; iv + 1 < mesh.n_v; ++iv) {
+        for (int iu = 0; iu + 1 < mesh.n_u; ++iu) {
+          const int a = iv * mesh.n_u + iu, b = a + 1, c = a + mesh.n_u, d = c + 1;
+          put(a);
+          put(b);
+          put(c);
+          put(b);
+          put(d);
+          put(c);
+        }
       }
     }
-    array.markers.push_back(std::move(m));
   }
   if (mode != RenderMode::Mesh) {
-    visualization_msgs::Marker m = base;
+    visualization_msgs::Marker& m = array.markers[next++];
     m.ns = "strands";
-    m.id = 0;
     m.type = visualization_msgs::Marker::LINE_LIST;
     m.scale.x = 0.0015;  // line width (m)
     std::vector<Vec3> points;
     std::vector<Rgba> colours;
     for (std::size_t s = 0; s < meshes.meshes().size(); ++s)
       HairLook::strandLines(meshes.meshes()[s], strands_per_strip, points, &meshes.colours()[s], &colours);
+    m.points.resize(points.size());
+    m.colors.resize(points.size());
     for (std::size_t k = 0; k < points.size(); ++k) {
-      m.points.push_back(toPoint(points[k]));
-      m.colors.push_back(toColor(colours[k]));
+      m.points[k] = toPoint(points[k]);
+      m.colors[k] = toColor(colours[k]);
     }
-    array.markers.push_back(std::move(m));
   }
+}
+
+visualization_msgs::MarkerArray makeHairMarkers(const HairMeshBuilder& meshes, RenderMode mode,
+                                                int strands_per_strip, const std::string& frame,
+                                                const ros::Time& stamp) {
+  visualization_msgs::MarkerArray array;
+  fillHairMarkers(meshes, mode, strands_per_strip, frame, stamp, array);
   return array;
 }
 

@@ -659,17 +659,24 @@ void HairSimNode::update(bool from_tf) {
 void HairSimNode::publishOutputs(const ros::Time& stamp, const Iso3& pose,
                                  const std::vector<Iso3>& body_frames) {
   simulator_->positionsWorld(pose, world_points_);
-  if (state_pub_.getNumSubscribers() > 0)  // shared pointers: zero-copy in a nodelet
-    state_pub_.publish(boost::make_shared<hair_sim_msgs::HairState>(
-        makeHairState(*simulator_, world_points_, config_.world_frame, stamp)));
+  // Shared pointers: zero-copy to subscribers in the same process (a nodelet manager), which keep the
+  // message; roscpp serialises for the others within publish() and keeps no reference. A message that
+  // only this node still holds is filled again in place (its buffers already have the size).
+  if (state_pub_.getNumSubscribers() > 0) {
+    if (!state_msg_ || !state_msg_.unique()) state_msg_ = boost::make_shared<hair_sim_msgs::HairState>();
+    fillHairState(*simulator_, world_points_, config_.world_frame, stamp, *state_msg_);
+    state_pub_.publish(state_msg_);
+  }
   if (markers_pub_.getNumSubscribers() == 0) return;
-  std::vector<Ellipsoid> bodies;
+  bodies_scratch_.clear();
   for (std::size_t b = 0; b < config_.bodies.size() && b < body_frames.size(); ++b)
-    bodies.push_back(config_.bodies[b].shape.transformed(body_frames[b]));
+    bodies_scratch_.push_back(config_.bodies[b].shape.transformed(body_frames[b]));
   meshes_->build(world_points_, simulator_->stripOffsets(), simulator_->hairstyle().scalp.transformed(pose),
-                 bodies);
-  markers_pub_.publish(boost::make_shared<visualization_msgs::MarkerArray>(
-      makeHairMarkers(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp)));
+                 bodies_scratch_);
+  if (!markers_msg_ || !markers_msg_.unique())
+    markers_msg_ = boost::make_shared<visualization_msgs::MarkerArray>();
+  fillHairMarkers(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp, *markers_msg_);
+  markers_pub_.publish(markers_msg_);
 }
 
 void HairSimNode::publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames) {

@@ -140,14 +140,15 @@ HairVisualStats HairVisual::update(const hair_sim_msgs::HairState& msg, const Ha
   std::size_t point_count = 0;
   for (std::size_t s = 0; s < msg.strips.size(); ++s) {
     const hair_sim_msgs::StripState& strip = msg.strips[s];
-    points_.resize(strip.points.size());
-    for (std::size_t k = 0; k < strip.points.size(); ++k)
-      points_[k] = Vec3(strip.points[k].x, strip.points[k].y, strip.points[k].z);
+    const std::size_t n_points = strip.xyz.size() / 3;
+    points_.resize(n_points);
+    for (std::size_t k = 0; k < n_points; ++k)
+      points_[k] = Vec3(strip.xyz[3 * k], strip.xyz[3 * k + 1], strip.xyz[3 * k + 2]);
     try {
-      if (strip.points.size() != static_cast<std::size_t>(strip.columns) * strip.rows)
-        throw std::invalid_argument(std::to_string(strip.points.size()) + " points for a " +
+      if (strip.xyz.size() != 3 * static_cast<std::size_t>(strip.columns) * strip.rows)
+        throw std::invalid_argument(std::to_string(strip.xyz.size()) + " xyz values for a " +
                                     std::to_string(strip.columns) + " x " + std::to_string(strip.rows) +
-                                    " grid");
+                                    " grid (3 per point)");
       if (strip.columns > 1000 || strip.rows > 1000)
         throw std::invalid_argument("grid " + std::to_string(strip.columns) + " x " +
                                     std::to_string(strip.rows) + " is larger than 1000 x 1000");

@@ -23,16 +23,24 @@ enum class RenderMode { Mesh, Strands, Both };
 
 geometry_msgs::Point toPoint(const Vec3& p);
 
-/// hair_state: every control point (world_points, positionsHead() order) with grid size and hair
-/// length per strip.
+/// hair_state: every control point (world_points, positionsHead() order) as float32 x, y, z, with grid
+/// size and hair length per strip.
 hair_sim_msgs::HairState makeHairState(const Simulator& simulator, const std::vector<Vec3>& world_points,
                                        const std::string& frame, const ros::Time& stamp);
+/// makeHairState into `state`, reusing its buffers (the node keeps one message while no one else holds it).
+void fillHairState(const Simulator& simulator, const std::vector<Vec3>& world_points,
+                   const std::string& frame, const ros::Time& stamp, hair_sim_msgs::HairState& state);
 
 /// hair_markers from meshes already built in `frame`: ns "hair" one TRIANGLE_LIST of every strip,
-/// both windings, per-vertex RGBA; ns "strands" a LINE_LIST of strands_per_strip strands per strip.
+/// one winding (rviz draws it with culling off and, with per-vertex colours, unlit: both faces show),
+/// per-vertex RGBA; ns "strands" a LINE_LIST of strands_per_strip strands per strip.
 visualization_msgs::MarkerArray makeHairMarkers(const HairMeshBuilder& meshes, RenderMode mode,
                                                 int strands_per_strip, const std::string& frame,
                                                 const ros::Time& stamp);
+/// makeHairMarkers into `array`, reusing its buffers (no allocation once they have grown).
+void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands_per_strip,
+                     const std::string& frame, const ros::Time& stamp,
+                     visualization_msgs::MarkerArray& array);
 
 /// collision_bodies: one SPHERE marker per body at its frame's pose (frames: world poses, the
 /// bodies' order); the bodies in head_frame opaque, the others translucent.

@@ -9,6 +9,9 @@
 #include <ros/ros.h>
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <boost/shared_ptr.hpp>
 
 #include <map>
 #include <memory>
@@ -105,6 +108,10 @@ class HairSimNode {
   std::vector<Iso3> last_body_frames_;
   std::vector<Iso3> published_body_frames_;
   std::vector<Vec3> world_points_;
+  std::vector<Ellipsoid> bodies_scratch_;  ///< the bodies in the world frame for the mesh (publishOutputs)
+  /// The last messages published; filled again in place when no subscriber in this process still holds them.
+  boost::shared_ptr<visualization_msgs::MarkerArray> markers_msg_;
+  boost::shared_ptr<hair_sim_msgs::HairState> state_msg_;
 
   // Wind: blends from wind_from_ to wind_to_ over [wind_start_, wind_start_ + wind_ramp_] (sim seconds).
   Vec3 wind_from_ = Vec3::Zero();

@@ -112,7 +112,19 @@ double HairLook::specular(const Vec3& tangent, const Vec3& light, const Vec3& vi
   const double sin_l = std::sqrt(std::max(0.0, 1.0 - tl * tl));
   const double sin_v = std::sqrt(std::max(0.0, 1.0 - tv * tv));
   const double cosine = std::min(1.0, sin_l * sin_v - tl * tv);
-  return cosine > 0.0 ? std::pow(cosine, exponent) : 0.0;
+  if (!(cosine > 0.0)) return 0.0;
+  // An integer exponent (the default 40) by repeated squaring: a few multiplications, within a few ulp of
+  // std::pow, which took 9 % of hair_sim_node's time with hair_markers subscribed (every vertex, every
+  // frame).
+  if (exponent <= 1024.0 && exponent == std::floor(exponent)) {
+    double result = 1.0, power = cosine;
+    for (unsigned n = static_cast<unsigned>(exponent); n != 0; n >>= 1) {
+      if (n & 1u) result *= power;
+      power *= power;
+    }
+    return result;
+  }
+  return std::pow(cosine, exponent);
 }
 
 double HairLook::stripeProfile(double u, std::uint32_t strip_seed, double width) const {
