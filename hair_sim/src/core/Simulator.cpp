@@ -697,13 +697,16 @@ bool Simulator::stripOutsideBand(std::size_t strip) const {
   return false;
 }
 
-bool Simulator::rowOutsideBand(std::size_t strip, int row) const {
+bool Simulator::rowOutsideBand(std::size_t strip, int row) const { return rowBandSide(strip, row) != 0; }
+
+int Simulator::rowBandSide(std::size_t strip, int row) const {
   const Strip& s = hairstyle_.strips[strip];
   const std::size_t begin = static_cast<std::size_t>(strip_offset_[strip] + s.index(row, 0));
   const std::size_t end = begin + static_cast<std::size_t>(s.columns);
   const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
   // relaxStrip may hold a row's far edge to that of the rows below it (tighten_to_).
   const int to = tighten_to_.empty() ? row : tighten_to_[static_cast<std::size_t>(row)];
+  int side = 0;
   for (std::size_t i = begin; i < end; ++i)
     for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
       const double rest = partner_rest_[static_cast<std::size_t>(q)];
@@ -715,9 +718,11 @@ bool Simulator::rowOutsideBand(std::size_t strip, int row) const {
         far_rest = std::min(far_rest, withinRest(i + step, j + step, far_rest));
       }
       const double dist = (positions_[i] - positions_[j]).norm();
-      if (dist > hi * far_rest * (1.0 + 1e-9) || dist < lo * rest) return true;
+      const int here = dist > hi * far_rest * (1.0 + 1e-10) ? 1 : dist < lo * rest ? -1 : 0;
+      if (here != 0 && side != 0 && here != side) return 2;
+      if (here != 0) side = here;
     }
-  return false;
+  return side;
 }
 
 double Simulator::withinRest(std::size_t i, std::size_t j, double fallback) const {
@@ -831,9 +836,35 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
       }
       const Vec3 m = candidate < 0 ? mean : row_dirs_[static_cast<std::size_t>(candidate)];
       if (m.norm() < 1e-9) continue;
-      for (int k = 0; k <= 64 && !found; ++k)
-        found =
-            place(m.normalized(), ((k + 1) / 2) * (k % 2 ? 1.0 : -1.0) / 32.0) && !rowOutsideBand(strip, r);
+      const Vec3 mn = m.normalized();
+      // A body can deflect an end so that the row's width jumps over the band between two steps of mu
+      // (too wide at one, too narrow at the next): then the band is looked for by bisection between them.
+      double last_mu[2] = {0.0, 0.0};
+      int last_side[2] = {3, 3};  // per direction (outward, inward); 3 = none yet
+      for (int k = 0; k <= 64 && !found; ++k) {
+        const double mu = ((k + 1) / 2) * (k % 2 ? 1.0 : -1.0) / 32.0;
+        const int side = place(mn, mu) ? rowBandSide(strip, r) : 3;
+        found = side == 0;
+        for (int dir = 0; dir < 2 && !found; ++dir) {
+          if (k != 0 && (k % 2) != dir) continue;  // mu = 0 starts both directions
+          if (std::abs(side) == 1 && std::abs(last_side[dir]) == 1 && side != last_side[dir]) {
+            double a = last_mu[dir], b = mu;  // side(a) = last_side, side(b) = side
+            for (int it = 0; it < 24 && !found; ++it) {
+              const double mid = 0.5 * (a + b);
+              const int mid_side = place(mn, mid) ? rowBandSide(strip, r) : 3;
+              found = mid_side == 0;
+              if (mid_side == last_side[dir])
+                a = mid;
+              else if (mid_side == side)
+                b = mid;
+              else
+                break;
+            }
+          }
+          last_mu[dir] = mu;
+          last_side[dir] = side;
+        }
+      }
     }
     if (found) continue;
     for (int c = 0; c < s.columns; ++c) {  // back to what the passes left (cleared of the bodies above)
@@ -1042,7 +1073,7 @@ void Simulator::step(const StepInputs& in) {
             const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
             if (moved_in_step_[j] != steps_) continue;  // kept when j is placed
             const double dist = (positions_[i] - positions_[j]).norm();
-            if (dist > hi_band * rest * (1.0 + 1e-9) || dist < lo_band * rest) {
+            if (dist > hi_band * rest * (1.0 + 1e-10) || dist < lo_band * rest) {
               outside_band = true;
               break;
             }

@@ -163,6 +163,9 @@ class Simulator {
   bool stripOutsideBand(std::size_t strip) const;
   /// The same for the pairs of one row of the strip.
   bool rowOutsideBand(std::size_t strip, int row) const;
+  /// Where the row's within-strip pairs are against the band: 0 within, 1 some too far apart, -1 some too
+  /// close, 2 both.
+  int rowBandSide(std::size_t strip, int row) const;
   /// Rest length of the within-strip pair (i, j), or fallback when they are not paired.
   double withinRest(std::size_t i, std::size_t j, double fallback) const;
   /// Gauss-Seidel passes over a strip whose band does not hold after the sweep: every segment again
