@@ -87,18 +87,20 @@ void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands
     m.ns = "hair";
     m.type = visualization_msgs::Marker::TRIANGLE_LIST;
     std::size_t total = 0;
-    for (const StripMesh& mesh : meshes.meshes())
-      total += 6 * static_cast<std::size_t>(std::max(mesh.n_u - 1, 0) * std::max(mesh.n_v - 1, 0));
+    for (const StripMesh& mesh : meshes.meshes()) total += 3 * static_cast<std::size_t>(mesh.triangleCount());
     // Resized in place: a reused message keeps its buffers (no allocation, no page faults).
     m.points.resize(total);
     m.colors.resize(total);
     geometry_msgs::Point* point = m.points.data();
     std_msgs::ColorRGBA* colour = m.colors.data();
+    std::vector<std::uint32_t> indices;  // one strip's triangles (one winding)
     for (std::size_t s = 0; s < meshes.meshes().size(); ++s) {
       const StripMesh& mesh = meshes.meshes()[s];
       const Vec3* positions = mesh.positions.data();
       const Rgba* colours = meshes.colours()[s].data();
-      const auto put = [&](int k) {
+      indices.clear();
+      Tessellator::appendTriangles(mesh, 0, false, indices);
+      for (std::uint32_t k : indices) {
         const Vec3& p = positions[k];
         point->x = p.x();
         point->y = p.y();
@@ -110,18 +112,6 @@ void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands
         colour->b = c.b;
         colour->a = c.a * (2.f - c.a);  // the coverage of the former two coincident layers (above)
         ++colour;
-      };
-      // The triangles of Tessellator::appendTriangles (one winding), written without an index list.
-      for (int iv = 0; iv + 1 < mesh.n_v; ++iv) {
-        for (int iu = 0; iu + 1 < mesh.n_u; ++iu) {
-          const int a = iv * mesh.n_u + iu, b = a + 1, c = a + mesh.n_u, d = c + 1;
-          put(a);
-          put(b);
-          put(c);
-          put(b);
-          put(d);
-          put(c);
-        }
       }
     }
   }
