@@ -703,7 +703,6 @@ int Simulator::rowBandSide(std::size_t strip, int row) const {
   const Strip& s = hairstyle_.strips[strip];
   const std::size_t begin = static_cast<std::size_t>(strip_offset_[strip] + s.index(row, 0));
   const std::size_t end = begin + static_cast<std::size_t>(s.columns);
-  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
   // relaxStrip may hold a row's far edge to that of the rows below it (tighten_to_).
   const int to = tighten_to_.empty() ? row : tighten_to_[static_cast<std::size_t>(row)];
   int side = 0;
@@ -712,17 +711,22 @@ int Simulator::rowBandSide(std::size_t strip, int row) const {
       const double rest = partner_rest_[static_cast<std::size_t>(q)];
       if (rest <= 0.0) continue;  // between strips
       const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
+      if (j < i) continue;  // each pair once (both ends are in this row)
       double far_rest = rest;
       for (int r = row + 1; r <= to; ++r) {
         const std::size_t step = static_cast<std::size_t>((r - row) * s.columns);
         far_rest = std::min(far_rest, withinRest(i + step, j + step, far_rest));
       }
-      const double dist = (positions_[i] - positions_[j]).norm();
-      const int here = dist > hi * far_rest * (1.0 + 1e-10) ? 1 : dist < lo * rest ? -1 : 0;
+      const int here = bandSide((positions_[i] - positions_[j]).norm(), rest, far_rest);
       if (here != 0 && side != 0 && here != side) return 2;
       if (here != 0) side = here;
     }
   return side;
+}
+
+int Simulator::bandSide(double dist, double rest, double far_rest) const {
+  if (dist > params_.spring_far_factor * far_rest * (1.0 + 1e-10)) return 1;
+  return dist < params_.spring_proximity_factor * rest ? -1 : 0;
 }
 
 double Simulator::withinRest(std::size_t i, std::size_t j, double fallback) const {
@@ -940,7 +944,6 @@ void Simulator::step(const StepInputs& in) {
   double max_rate = 0.0;
   // Largest squared rate of the sweeps (sqrt and / dt are monotonic: max_rate is taken from it at the end).
   double max_rate2 = 0.0;
-  const double lo_band = params_.spring_proximity_factor, hi_band = params_.spring_far_factor;
   const double k_c = params_.collision_stiffness, c_c = params_.collision_damping;
   collisions_ = 0;
   double max_penetration = 0.0;
@@ -1072,8 +1075,7 @@ void Simulator::step(const StepInputs& in) {
             if (rest <= 0.0) continue;  // between strips
             const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
             if (moved_in_step_[j] != steps_) continue;  // kept when j is placed
-            const double dist = (positions_[i] - positions_[j]).norm();
-            if (dist > hi_band * rest * (1.0 + 1e-10) || dist < lo_band * rest) {
+            if (bandSide((positions_[i] - positions_[j]).norm(), rest, rest) != 0) {
               outside_band = true;
               break;
             }

@@ -166,6 +166,9 @@ class Simulator {
   /// Where the row's within-strip pairs are against the band: 0 within, 1 some too far apart, -1 some too
   /// close, 2 both.
   int rowBandSide(std::size_t strip, int row) const;
+  /// A within-strip pair at distance dist against the band: 1 farther than far_factor x far_rest (the far
+  /// edge, to 1e-10 relative), -1 closer than proximity_factor x rest, else 0.
+  int bandSide(double dist, double rest, double far_rest) const;
   /// Rest length of the within-strip pair (i, j), or fallback when they are not paired.
   double withinRest(std::size_t i, std::size_t j, double fallback) const;
   /// Gauss-Seidel passes over a strip whose band does not hold after the sweep: every segment again
