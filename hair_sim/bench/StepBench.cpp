@@ -43,6 +43,7 @@ void BM_Step(benchmark::State& state) {
   head.reset(rest);
   const double dt = config.physics.substep;
   long n = 0;
+  double exact = 0.0;
   for (auto _ : state) {
     ++n;
     Iso3 pose = rest;
@@ -53,10 +54,14 @@ void BM_Step(benchmark::State& state) {
     for (const Body& b : config.bodies)
       in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
     sim.step(in);
+    exact += sim.exactStripCount();
   }
   state.SetItemsProcessed(state.iterations() * sim.controlPointCount());
   state.counters["control_points"] = sim.controlPointCount();
   state.counters["strips"] = static_cast<double>(sim.hairstyle().strips.size());
+  // Share of the strips that took the exact per-strip step (Simulator::StepPath).
+  state.counters["exact_share"] =
+      exact / (static_cast<double>(n) * static_cast<double>(sim.hairstyle().strips.size()));
 }
 BENCHMARK(BM_Step)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
 

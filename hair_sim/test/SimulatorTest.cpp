@@ -284,6 +284,104 @@ TEST(SimulatorTest, IdenticalInputsGiveBitIdenticalResults) {
   EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)));
 }
 
+/// The default hairstyle with the default bodies, springs on, under a shaking and nodding head in wind: the
+/// step paths of Simulator::StepPath on the same inputs. Returns the control points after `steps` substeps
+/// and the strips that went to the exact step over the run.
+std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude, long* exact_strips = nullptr,
+                          double* max_penetration = nullptr) {
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  Simulator sim(loadHairstyle(config.hairstyle_file), config.physics, config.bodies);
+  sim.setStepPath(path);
+  HeadMotionEstimator head;
+  Iso3 rest = Iso3::Identity();
+  rest.translation() = Vec3(0.0, 0.0, 1.6);
+  head.reset(rest);
+  long exact = 0;
+  double penetration = 0.0;
+  for (int i = 1; i <= steps; ++i) {
+    Iso3 pose = rest;
+    const double a = amplitude;
+    pose.linear() =
+        rotationFromRpy(Vec3(0.0, 0.3 * a * std::sin(i * 0.05 * a), 0.9 * a * std::sin(i * 0.03 * a)));
+    StepInputs in;
+    in.head = head.update(pose, sim.parameters().substep);
+    in.wind = Vec3(2.0, 1.0, 0.0);
+    for (const Body& b : config.bodies)
+      in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
+    sim.step(in);
+    exact += sim.exactStripCount();
+    penetration = std::max(penetration, sim.maxPenetration());
+  }
+  if (exact_strips) *exact_strips = exact;
+  if (max_penetration) *max_penetration = penetration;
+  return sim.positionsHead();
+}
+
+TEST(SimulatorTest, LanePathGivesTheSameBitsWithAndWithoutAvx2) {
+  // The AVX2 and baseline kernels run the same operations in the same order without FMA. (On a CPU without
+  // AVX2 both runs take the baseline kernel and the test only checks determinism.)
+  long exact = 0;
+  const int steps = 480;
+  const std::vector<Vec3> a = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact);
+  const std::vector<Vec3> b = runPath(Simulator::StepPath::LanesBaseline, steps, 1.0);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)));
+  // Both halves of the path were exercised: strips committed from the lanes and strips sent to the exact
+  // step.
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  const long strip_steps = static_cast<long>(loadHairstyle(config.hairstyle_file).strips.size()) * steps;
+  EXPECT_GT(exact, 0);
+  EXPECT_LT(exact, strip_steps / 2);
+}
+
+TEST(SimulatorTest, LanePathFollowsTheExactStep) {
+  // The lanes take the exact step's decisions (which strips the constraints move, in the same order), so the
+  // two differ only by rounding (operation order; atan2 against the lanes' rational approximation, both
+  // within 2 ulp): below 1e-8 m after 40 substeps of a slow head turn in wind with strips against the bodies
+  // (the jittering ones amplify rounding about tenfold per 10 substeps, so longer runs drift apart as any two
+  // builds would).
+  const std::vector<Vec3> lanes = runPath(Simulator::StepPath::Lanes, 40, 1.0 / 3.0);
+  const std::vector<Vec3> exact = runPath(Simulator::StepPath::Exact, 40, 1.0 / 3.0);
+  ASSERT_EQ(lanes.size(), exact.size());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < lanes.size(); ++i) worst = std::max(worst, (lanes[i] - exact[i]).norm());
+  EXPECT_LT(worst, 1e-8);
+  // Under violent input neither path leaves a control point inside a body.
+  double pen_lanes = 1.0, pen_exact = 1.0;
+  runPath(Simulator::StepPath::Lanes, 240, 1.0, nullptr, &pen_lanes);
+  runPath(Simulator::StepPath::Exact, 240, 1.0, nullptr, &pen_exact);
+  EXPECT_EQ(pen_lanes, 0.0);
+  EXPECT_EQ(pen_exact, 0.0);
+}
+
+TEST(SimulatorTest, FreeStripsNeverNeedTheExactStep) {
+  // No body, no spring: nothing for the exact step to do, every strip is committed from the lanes, and the
+  // result is the exact step's within rounding after a second of swinging.
+  PhysicsParameters p;
+  p.springs_within_strips = false;
+  p.springs_between_strips = false;
+  auto run = [&](Simulator::StepPath path, int* exact) {
+    Simulator sim(test::hangingStrip(3, 6, 0.05, 0.7), p);
+    sim.setStepPath(path);
+    StepInputs in;
+    in.wind = Vec3(0.0, 3.0, 0.0);
+    *exact = 0;
+    for (int i = 0; i < 240; ++i) {
+      sim.step(in);
+      *exact += sim.exactStripCount();
+    }
+    return sim.positionsHead();
+  };
+  int exact_lanes = -1, exact_exact = -1;
+  const std::vector<Vec3> a = run(Simulator::StepPath::Lanes, &exact_lanes);
+  const std::vector<Vec3> b = run(Simulator::StepPath::Exact, &exact_exact);
+  EXPECT_EQ(exact_lanes, 0);
+  EXPECT_EQ(exact_exact, 240);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+  EXPECT_LT(worst, 1e-9);
+}
+
 TEST(SimulatorTest, RejectsBadParametersAndShapes) {
   PhysicsParameters p;
   p.substep = -1.0;

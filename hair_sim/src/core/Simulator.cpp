@@ -9,6 +9,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "StepLanes.hpp"
+
 namespace hair_sim {
 
 namespace {
@@ -151,6 +153,165 @@ void Simulator::buildChains() {
     offset += s.pointCount();
   }
   updateSegmentConstants();
+  buildLanes();
+}
+
+void Simulator::buildLanes() {
+  constexpr int W = lanes::kLanes;
+  std::vector<std::pair<int, int>> chains;  // (strip, column)
+  int max_rows = 0;
+  for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
+    const Strip& s = hairstyle_.strips[si];
+    max_rows = std::max(max_rows, s.rows);
+    for (int c = 0; c < s.columns; ++c) chains.emplace_back(static_cast<int>(si), c);
+  }
+  const std::size_t blocks = (chains.size() + W - 1) / W;
+  lane_stride_rows_ = max_rows;
+  block_rows_.assign(blocks, 0);
+  block_margin_.assign(blocks, -1);
+  lane_point_.assign(blocks * static_cast<std::size_t>(max_rows) * W, -1);
+  lane_strip_.assign(blocks * W, -1);
+  for (std::size_t ch = 0; ch < chains.size(); ++ch) {
+    const std::size_t blk = ch / W, l = ch % W;
+    const std::size_t si = static_cast<std::size_t>(chains[ch].first);
+    const Strip& s = hairstyle_.strips[si];
+    const int c = chains[ch].second;
+    lane_strip_[blk * W + l] = static_cast<int>(si);
+    block_rows_[blk] = std::max(block_rows_[blk], s.rows);
+    // A block whose strips differ in margin sees different inflated bodies: it takes the exact step.
+    const int m = margin_of_strip_[si];
+    block_margin_[blk] = (l == 0 || block_margin_[blk] == m) ? m : -2;
+    for (int r = 0; r < s.rows; ++r)
+      lane_point_[(blk * static_cast<std::size_t>(max_rows) + static_cast<std::size_t>(r)) * W + l] =
+          strip_offset_[si] + s.index(r, c);
+  }
+  for (int& m : block_margin_) m = std::max(m, -1);
+  const std::size_t n = positions_.size();
+  new_position_.assign(n, Vec3::Zero());
+  new_direction_.assign(n, Vec3::UnitZ());
+  new_rate_.assign(n, Vec3::Zero());
+  new_velocity_.assign(n, Vec3::Zero());
+  new_mid_.assign(n, Vec3::Zero());
+  strip_exact_.assign(hairstyle_.strips.size(), 0);
+}
+
+void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally) {
+  constexpr int W = lanes::kLanes;
+  const std::size_t nb = bodies_.size();
+  lane_bodies_.resize(margins_.size() * nb);
+  for (std::size_t m = 0; m < margins_.size() && nb > 0; ++m)
+    for (std::size_t b = 0; b < nb; ++b) {
+      lanes::LaneBody& lb = lane_bodies_[m * nb + b];
+      const Ellipsoid& now = bodies_now_[m][b];
+      const Ellipsoid& before = have_bodies_before_ ? bodies_before_[m][b] : now;
+      for (int r = 0; r < 3; ++r) {
+        lb.centre[r] = now.center()[r];
+        lb.centre_before[r] = before.center()[r];
+        for (int c = 0; c < 3; ++c) {
+          lb.sinv[3 * r + c] = now.Sinv()(r, c);
+          lb.sinv_before[3 * r + c] = before.Sinv()(r, c);
+        }
+      }
+      lb.min_radius = now.radii().minCoeff();
+      const BodyBound& bound = body_bounds_[m][b];
+      lb.bound_radius = bound.radius;
+      lb.motion = bound.motion;
+      lb.shift = bound.shift;
+    }
+  std::fill(strip_exact_.begin(), strip_exact_.end(), 0);
+
+  lanes::BlockJob job;
+  job.dt = f.dt, job.rho = f.rho, job.k = f.k, job.gamma = f.gamma, job.drag = f.drag;
+  job.max_angle_step = params_.max_angle_step;
+  job.cos_max_bend = f.cos_max_bend;
+  for (int r = 0; r < 3; ++r) {
+    job.g[r] = f.g[r], job.acc0[r] = f.acc0[r], job.omega[r] = f.omega[r];
+    job.alpha[r] = f.alpha[r], job.air0[r] = f.air0[r];
+  }
+  job.positions = positions_.data();
+  job.direction = direction_.data();
+  job.velocity = velocity_.data();
+  job.rate = rate_.data();
+  job.previous_mid = previous_mid_.data();
+  job.spring_force = spring_force_.data();
+  job.rest_dir = rest_dir_.data();
+  job.styled_dir = styled_dir_.data();
+  job.length = length_.data();
+  job.inv_inertia = inv_inertia_.data();
+  job.out_position = new_position_.data();
+  job.out_direction = new_direction_.data();
+  job.out_rate = new_rate_.data();
+  job.out_velocity = new_velocity_.data();
+  job.out_mid = new_mid_.data();
+  job.body_count = static_cast<int>(nb);
+  job.have_before = have_bodies_before_;
+  job.turbulence = f.turbulent ? in.turbulence : nullptr;
+  job.head_pose = &in.head.pose;
+  job.head_rotation_inverse = &f.Rt;
+  const bool baseline = step_path_ == StepPath::LanesBaseline;
+  const std::size_t stride = static_cast<std::size_t>(lane_stride_rows_) * W;
+  for (std::size_t blk = 0; blk < block_rows_.size(); ++blk) {
+    const int* strips = &lane_strip_[blk * W];
+    if (block_margin_[blk] < 0) {
+      for (int l = 0; l < W; ++l)
+        if (strips[l] >= 0) strip_exact_[static_cast<std::size_t>(strips[l])] = 1;
+      continue;
+    }
+    job.rows = block_rows_[blk];
+    job.point = &lane_point_[blk * stride];
+    job.bodies = nb > 0 ? &lane_bodies_[static_cast<std::size_t>(block_margin_[blk]) * nb] : nullptr;
+    lanes::stepBlock(job, baseline);
+    for (int l = 0; l < W; ++l)
+      if (job.flag[l] && strips[l] >= 0) strip_exact_[static_cast<std::size_t>(strips[l])] = 1;
+  }
+
+  // In strip order, as the exact step goes: a strip is committed from the lanes when the spring band holds
+  // at its new places (what resolveCollisions and the sweep's band check would act on) for its pairs within
+  // the strip and with the earlier strips, already final (with 1e-9 relative to spare; pairs with a root are
+  // never moved, so never kept); otherwise it takes the exact step, which, like the lanes, sees the later
+  // strips as not yet moved. So both paths take the same decisions.
+  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
+  double max_rate2 = 0.0;
+  exact_strips_ = 0;
+  for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
+    const Strip& s = hairstyle_.strips[si];
+    const int first = strip_offset_[si] + s.columns;
+    const int end = strip_offset_[si] + s.pointCount();
+    bool exact = strip_exact_[si] != 0;
+    for (int i = first; i < end && !exact; ++i) {
+      for (int q = partner_start_[static_cast<std::size_t>(i)];
+           q < partner_start_[static_cast<std::size_t>(i) + 1]; ++q) {
+        const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
+        const std::size_t t = static_cast<std::size_t>(strip_of_point_[j]);
+        if (t > si) continue;  // kept by strip t
+        if (static_cast<int>(j) - strip_offset_[t] < hairstyle_.strips[t].columns) continue;  // a root
+        const Vec3& other = t == si ? new_position_[j] : positions_[j];
+        const double signed_rest = partner_rest_[static_cast<std::size_t>(q)];
+        const double rest = std::abs(signed_rest);
+        const double dist2 = (new_position_[static_cast<std::size_t>(i)] - other).squaredNorm();
+        const double near = lo * rest, far = hi * rest;
+        if (dist2 < near * near * (1.0 + 1e-9) || (signed_rest > 0.0 && dist2 > far * far * (1.0 - 1e-9))) {
+          exact = true;
+          break;
+        }
+      }
+    }
+    if (exact) {
+      stepStrip(in, f, si, strip_offset_[si], tally);
+      ++exact_strips_;
+      continue;
+    }
+    for (std::size_t i = static_cast<std::size_t>(first); i < static_cast<std::size_t>(end); ++i) {
+      positions_[i] = new_position_[i];
+      direction_[i] = new_direction_[i];
+      rate_[i] = new_rate_[i];
+      velocity_[i] = new_velocity_[i];
+      previous_mid_[i] = new_mid_[i];
+      moved_in_step_[i] = steps_;
+      max_rate2 = std::max(max_rate2, rate_[i].squaredNorm());
+    }
+  }
+  tally.max_rate2 = std::max(tally.max_rate2, max_rate2);
 }
 
 void Simulator::updateSegmentConstants() {
@@ -926,35 +1087,31 @@ void Simulator::setShape(const std::vector<Vec3>& target) {
 }
 
 void Simulator::step(const StepInputs& in) {
-  const double dt = params_.substep;
-  const double rho = params_.linear_density;
-  const double k = params_.hinge_stiffness;
-  const double gamma = params_.hinge_damping;
-  const double drag = params_.air_drag;
+  StepFrame f;
+  f.dt = params_.substep;
+  f.rho = params_.linear_density;
+  f.k = params_.hinge_stiffness;
+  f.gamma = params_.hinge_damping;
+  f.drag = params_.air_drag;
   // Slightly above cos(max_bend), so that rounding never skips an angle just over the limit.
-  const double cos_max_bend = std::cos(params_.max_bend) + 1e-12;
-  const Mat3 Rt = in.head.pose.linear().transpose();
+  f.cos_max_bend = std::cos(params_.max_bend) + 1e-12;
+  f.Rt = in.head.pose.linear().transpose();
   // World quantities seen from the head frame.
-  const Vec3 g = Rt * (in.gravity ? *in.gravity : params_.gravity);
-  const bool turbulent = in.turbulence && !in.turbulence->empty();
-  const Vec3 acc0 = Rt * in.head.linear_acceleration;
-  const Vec3 omega = Rt * in.head.angular_velocity;
-  const Vec3 alpha = Rt * in.head.angular_acceleration;
-  const Vec3 air0 = Rt * (in.wind - in.head.linear_velocity);  // air velocity at the head origin, head frame
-  double max_rate = 0.0;
-  // Largest squared rate of the sweeps (sqrt and / dt are monotonic: max_rate is taken from it at the end).
-  double max_rate2 = 0.0;
-  const double k_c = params_.collision_stiffness, c_c = params_.collision_damping;
+  f.g = f.Rt * (in.gravity ? *in.gravity : params_.gravity);
+  f.turbulent = in.turbulence && !in.turbulence->empty();
+  f.acc0 = f.Rt * in.head.linear_acceleration;
+  f.omega = f.Rt * in.head.angular_velocity;
+  f.alpha = f.Rt * in.head.angular_acceleration;
+  f.air0 = f.Rt * (in.wind - in.head.linear_velocity);  // air velocity at the head origin, head frame
+  f.k_c = params_.collision_stiffness;
+  f.c_c = params_.collision_damping;
   collisions_ = 0;
-  double max_penetration = 0.0;
-  int penetrations = 0;
   if (!bodies_.empty()) {
     bodies_now_.resize(margins_.size());
     for (std::size_t m = 0; m < margins_.size(); ++m)
       bodies_now_[m] = bodiesInHeadFrame(in.head.pose, in.body_frames, margins_[m]);
   }
   if (!springs_.empty()) computeSpringForces();
-  static const std::vector<Ellipsoid> kNone;
   if (!bodies_.empty()) {
     body_bounds_.resize(margins_.size());
     for (std::size_t m = 0; m < margins_.size(); ++m) {
@@ -976,140 +1133,158 @@ void Simulator::step(const StepInputs& in) {
     }
   }
 
-  int offset = 0;
-  for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
-    const Strip& s = hairstyle_.strips[si];
-    const std::vector<Ellipsoid>& bodies_now =
-        bodies_.empty() ? kNone : bodies_now_[static_cast<std::size_t>(margin_of_strip_[si])];
-    const std::vector<Ellipsoid>& bodies_before =
-        (bodies_.empty() || !have_bodies_before_)
-            ? kNone
-            : bodies_before_[static_cast<std::size_t>(margin_of_strip_[si])];
-    bounds_ = bodies_.empty() ? nullptr : &body_bounds_[static_cast<std::size_t>(margin_of_strip_[si])];
-    // The strip at the start of the substep for relaxStrip (rows >= 1, filled as the sweep moves them).
-    const std::size_t count = static_cast<std::size_t>(s.pointCount());
-    if (start_pos_.size() < count) {
-      start_pos_.resize(count);
-      start_dir_.resize(count);
-      start_mid_.resize(count);
+  StepTally tally;
+  if (step_path_ == StepPath::Exact || lane_point_.empty()) {
+    int offset = 0;
+    for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
+      stepStrip(in, f, si, offset, tally);
+      offset += hairstyle_.strips[si].pointCount();
     }
-    // The within-strip band (stripOutsideBand), checked as the sweep places the later point of each pair.
-    const bool check_band = params_.springs_within_strips;
-    bool outside_band = false;
-    for (int c = 0; c < s.columns; ++c) {
-      Mat3 Q = Mat3::Identity();  // rotation of the parent segment from its styled frame
-      std::size_t parent = static_cast<std::size_t>(offset + s.index(0, c));
-      for (int r = 1; r < s.rows; ++r) {
-        const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
-        const double d = length_[i];
-        const double inv_i = inv_inertia_[i];
-        const Vec3& pivot = positions_[parent];
-        const Vec3 n = direction_[i];
-        const Vec3 mid = pivot + 0.5 * d * n;
-        const Vec3& v = velocity_[i];  // midpoint velocity relative to the head over the last substep
-        const std::size_t local = i - static_cast<std::size_t>(offset);
-        start_pos_[local] = positions_[i];
-        start_dir_[local] = n;
-        start_mid_[local] = previous_mid_[i];
-        // (6): F = rho d (g + a) + d f with the fictitious acceleration a of the head frame
-        // (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the hair.
-        const Vec3 a = -acc0 - alpha.cross(mid) - omega.cross(omega.cross(mid)) - 2.0 * omega.cross(v);
-        Vec3 air = air0 - omega.cross(mid);
-        if (turbulent) air += Rt * in.turbulence->at(in.head.pose * mid);
-        Vec3 F = rho * d * (g + a) + d * drag * (air - v) + spring_force_[i];
-        // (8)-(10): reaction constraint while the control point is inside an inflated body (only a
-        // body within the segment's reach can hold it).
-        const Vec3 end_now = pivot + d * n;
-        prepareBodies(pivot, d, positions_[i], bodies_now, bodies_before);
-        for (std::size_t b : near_) {
-          const Ellipsoid& e = bodies_now[b];
-          if ((q_pivot_[b] + d * (e.Sinv() * n)).squaredNorm() >= 1.0) continue;
-          const Ellipsoid::ClosestPoint cp = e.closestPoint(end_now);
-          const Vec3 v_end = (end_now - positions_[i]) / dt;
-          F = reactionForce(F, -cp.normal, -cp.signed_distance, v_end, k_c, c_c);
-        }
-        // (4)-(5): moment of F at the lever d/2 about the two axes perpendicular to the segment.
-        Vec3 M = 0.5 * d * n.cross(F);
-        // (3): hinge spring toward the rest direction carried by the parent.
-        const Vec3 rest = (r == 1) ? rest_dir_[i] : Vec3(Q * rest_dir_[i]);
-        M -= k * rotationVectorBetween(rest, n);
-        M -= M.dot(n) * n;
-        // (7) corrected: I (w^{n+1} - w^n) + gamma dt w^n = dt^2 M; a swing, so without a component
-        // along n (twisting a segment about itself does not move it).
-        Vec3 w = rate_[i] * (1.0 - gamma * dt * inv_i) + (dt * dt * inv_i) * M;
-        w -= w.dot(n) * n;
-        const double step_angle = w.norm();
-        if (step_angle > params_.max_angle_step) w *= params_.max_angle_step / step_angle;
-        Vec3 next = rotateByVector(w, n).normalized();
-        const Vec3 free_next = next;
-        // Bend limit relative to the rest direction keeps the hinge away from a fold-back (the angle
-        // is only needed when the cosine says it may be over the limit).
-        if (rest.dot(next) < cos_max_bend) {
-          const Vec3 bend = rotationVectorBetween(rest, next);
-          const double bend_angle = bend.norm();
-          if (bend_angle > params_.max_bend)
-            next = rotateByVector(bend * (params_.max_bend / bend_angle), rest);
-        }
-        if (!bodies_now.empty() || partner_start_[i + 1] > partner_start_[i]) {
-          next = resolveCollisions(static_cast<int>(i), pivot, d, next, bodies_now, bodies_before);
-          const Vec3 end = pivot + d * next;
-          bool inside = false;
-          for (std::size_t b : near_)
-            if (bodies_now[b].contains(end)) {
-              max_penetration = std::max(max_penetration, -bodies_now[b].closestPoint(end).signed_distance);
-              inside = true;
-            }
-          if (inside) ++penetrations;
-        }
-        // The rotation of this substep: w itself unless a limit or a constraint moved the end.
-        if (next != free_next) w = rotationVectorBetween(n, next);
-        max_rate2 = std::max(max_rate2, w.squaredNorm());
-        rate_[i] = w;
-        direction_[i] = next;
-        positions_[i] = pivot + d * next;
-        moved_in_step_[i] = steps_;
-        if (check_band && !outside_band) {
-          // rowOutsideBand's test for the pairs whose other point is already in place.
-          for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
-            const double rest = partner_rest_[static_cast<std::size_t>(q)];
-            if (rest <= 0.0) continue;  // between strips
-            const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
-            if (moved_in_step_[j] != steps_) continue;  // kept when j is placed
-            if (bandSide((positions_[i] - positions_[j]).norm(), rest, rest) != 0) {
-              outside_band = true;
-              break;
-            }
-          }
-        }
-        const Vec3 mid_next = pivot + 0.5 * d * next;
-        velocity_[i] = (mid_next - previous_mid_[i]) / dt;
-        previous_mid_[i] = mid_next;
-        if (r + 1 < s.rows)
-          Q = minimalRotation(Q * styled_dir_[i], next) * Q;  // the next segment's rest frame
-        parent = i;
-      }
-    }
-    if (outside_band) {
-      relaxStrip(si, bodies_now, bodies_before);
-      for (int p = s.columns; p < s.pointCount(); ++p) {
-        const std::size_t i = static_cast<std::size_t>(offset + p);
-        max_rate = std::max(max_rate, rate_[i].norm() / dt);
-        for (const Ellipsoid& e : bodies_now)
-          if (e.contains(positions_[i]))
-            max_penetration = std::max(max_penetration, -e.closestPoint(positions_[i]).signed_distance);
-      }
-    }
-    offset += s.pointCount();
+    exact_strips_ = static_cast<int>(hairstyle_.strips.size());
+  } else {
+    stepLanes(in, f, tally);
   }
   bounds_ = nullptr;
-  max_rate_ = std::max(max_rate, std::sqrt(max_rate2) / dt);
-  max_penetration_ = max_penetration;
-  penetrations_ = penetrations;
+  max_rate_ = std::max(tally.max_rate, std::sqrt(tally.max_rate2) / f.dt);
+  max_penetration_ = tally.max_penetration;
+  penetrations_ = tally.penetrations;
   if (!bodies_.empty()) {
     bodies_before_ = bodies_now_;
     have_bodies_before_ = true;
   }
   ++steps_;
+}
+
+void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset,
+                          StepTally& tally) {
+  const double dt = f.dt, rho = f.rho, k = f.k, gamma = f.gamma, drag = f.drag;
+  const double cos_max_bend = f.cos_max_bend, k_c = f.k_c, c_c = f.c_c;
+  const Mat3& Rt = f.Rt;
+  const Vec3 &g = f.g, &acc0 = f.acc0, &omega = f.omega, &alpha = f.alpha, &air0 = f.air0;
+  const bool turbulent = f.turbulent;
+  static const std::vector<Ellipsoid> kNone;
+  const Strip& s = hairstyle_.strips[si];
+  const std::vector<Ellipsoid>& bodies_now =
+      bodies_.empty() ? kNone : bodies_now_[static_cast<std::size_t>(margin_of_strip_[si])];
+  const std::vector<Ellipsoid>& bodies_before =
+      (bodies_.empty() || !have_bodies_before_)
+          ? kNone
+          : bodies_before_[static_cast<std::size_t>(margin_of_strip_[si])];
+  bounds_ = bodies_.empty() ? nullptr : &body_bounds_[static_cast<std::size_t>(margin_of_strip_[si])];
+  // The strip at the start of the substep for relaxStrip (rows >= 1, filled as the sweep moves them).
+  const std::size_t count = static_cast<std::size_t>(s.pointCount());
+  if (start_pos_.size() < count) {
+    start_pos_.resize(count);
+    start_dir_.resize(count);
+    start_mid_.resize(count);
+  }
+  // The within-strip band (stripOutsideBand), checked as the sweep places the later point of each pair.
+  const bool check_band = params_.springs_within_strips;
+  bool outside_band = false;
+  for (int c = 0; c < s.columns; ++c) {
+    Mat3 Q = Mat3::Identity();  // rotation of the parent segment from its styled frame
+    std::size_t parent = static_cast<std::size_t>(offset + s.index(0, c));
+    for (int r = 1; r < s.rows; ++r) {
+      const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
+      const double d = length_[i];
+      const double inv_i = inv_inertia_[i];
+      const Vec3& pivot = positions_[parent];
+      const Vec3 n = direction_[i];
+      const Vec3 mid = pivot + 0.5 * d * n;
+      const Vec3& v = velocity_[i];  // midpoint velocity relative to the head over the last substep
+      const std::size_t local = i - static_cast<std::size_t>(offset);
+      start_pos_[local] = positions_[i];
+      start_dir_[local] = n;
+      start_mid_[local] = previous_mid_[i];
+      // (6): F = rho d (g + a) + d f with the fictitious acceleration a of the head frame
+      // (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the hair.
+      const Vec3 a = -acc0 - alpha.cross(mid) - omega.cross(omega.cross(mid)) - 2.0 * omega.cross(v);
+      Vec3 air = air0 - omega.cross(mid);
+      if (turbulent) air += Rt * in.turbulence->at(in.head.pose * mid);
+      Vec3 F = rho * d * (g + a) + d * drag * (air - v) + spring_force_[i];
+      // (8)-(10): reaction constraint while the control point is inside an inflated body (only a
+      // body within the segment's reach can hold it).
+      const Vec3 end_now = pivot + d * n;
+      prepareBodies(pivot, d, positions_[i], bodies_now, bodies_before);
+      for (std::size_t b : near_) {
+        const Ellipsoid& e = bodies_now[b];
+        if ((q_pivot_[b] + d * (e.Sinv() * n)).squaredNorm() >= 1.0) continue;
+        const Ellipsoid::ClosestPoint cp = e.closestPoint(end_now);
+        const Vec3 v_end = (end_now - positions_[i]) / dt;
+        F = reactionForce(F, -cp.normal, -cp.signed_distance, v_end, k_c, c_c);
+      }
+      // (4)-(5): moment of F at the lever d/2 about the two axes perpendicular to the segment.
+      Vec3 M = 0.5 * d * n.cross(F);
+      // (3): hinge spring toward the rest direction carried by the parent.
+      const Vec3 rest = (r == 1) ? rest_dir_[i] : Vec3(Q * rest_dir_[i]);
+      M -= k * rotationVectorBetween(rest, n);
+      M -= M.dot(n) * n;
+      // (7) corrected: I (w^{n+1} - w^n) + gamma dt w^n = dt^2 M; a swing, so without a component
+      // along n (twisting a segment about itself does not move it).
+      Vec3 w = rate_[i] * (1.0 - gamma * dt * inv_i) + (dt * dt * inv_i) * M;
+      w -= w.dot(n) * n;
+      const double step_angle = w.norm();
+      if (step_angle > params_.max_angle_step) w *= params_.max_angle_step / step_angle;
+      Vec3 next = rotateByVector(w, n).normalized();
+      const Vec3 free_next = next;
+      // Bend limit relative to the rest direction keeps the hinge away from a fold-back (the angle
+      // is only needed when the cosine says it may be over the limit).
+      if (rest.dot(next) < cos_max_bend) {
+        const Vec3 bend = rotationVectorBetween(rest, next);
+        const double bend_angle = bend.norm();
+        if (bend_angle > params_.max_bend)
+          next = rotateByVector(bend * (params_.max_bend / bend_angle), rest);
+      }
+      if (!bodies_now.empty() || partner_start_[i + 1] > partner_start_[i]) {
+        next = resolveCollisions(static_cast<int>(i), pivot, d, next, bodies_now, bodies_before);
+        const Vec3 end = pivot + d * next;
+        bool inside = false;
+        for (std::size_t b : near_)
+          if (bodies_now[b].contains(end)) {
+            tally.max_penetration =
+                std::max(tally.max_penetration, -bodies_now[b].closestPoint(end).signed_distance);
+            inside = true;
+          }
+        if (inside) ++tally.penetrations;
+      }
+      // The rotation of this substep: w itself unless a limit or a constraint moved the end.
+      if (next != free_next) w = rotationVectorBetween(n, next);
+      tally.max_rate2 = std::max(tally.max_rate2, w.squaredNorm());
+      rate_[i] = w;
+      direction_[i] = next;
+      positions_[i] = pivot + d * next;
+      moved_in_step_[i] = steps_;
+      if (check_band && !outside_band) {
+        // rowOutsideBand's test for the pairs whose other point is already in place.
+        for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
+          const double rest = partner_rest_[static_cast<std::size_t>(q)];
+          if (rest <= 0.0) continue;  // between strips
+          const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
+          if (moved_in_step_[j] != steps_) continue;  // kept when j is placed
+          if (bandSide((positions_[i] - positions_[j]).norm(), rest, rest) != 0) {
+            outside_band = true;
+            break;
+          }
+        }
+      }
+      const Vec3 mid_next = pivot + 0.5 * d * next;
+      velocity_[i] = (mid_next - previous_mid_[i]) / dt;
+      previous_mid_[i] = mid_next;
+      if (r + 1 < s.rows) Q = minimalRotation(Q * styled_dir_[i], next) * Q;  // the next segment's rest frame
+      parent = i;
+    }
+  }
+  if (outside_band) {
+    relaxStrip(si, bodies_now, bodies_before);
+    for (int p = s.columns; p < s.pointCount(); ++p) {
+      const std::size_t i = static_cast<std::size_t>(offset + p);
+      tally.max_rate = std::max(tally.max_rate, rate_[i].norm() / dt);
+      for (const Ellipsoid& e : bodies_now)
+        if (e.contains(positions_[i]))
+          tally.max_penetration =
+              std::max(tally.max_penetration, -e.closestPoint(positions_[i]).signed_distance);
+    }
+  }
 }
 
 void Simulator::positionsWorld(const Iso3& head_pose, std::vector<Vec3>& out) const {

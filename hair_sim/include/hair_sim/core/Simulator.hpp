@@ -46,6 +46,21 @@
 
 namespace hair_sim {
 
+namespace lanes {
+/// Internal to step()'s vectorised path: one body inflated by a strip's margin, in the head frame, now and
+/// at the previous substep, as flat arrays.
+struct LaneBody {
+  double centre[3];
+  double sinv[9];  ///< S^-1, row-major
+  double min_radius;
+  double centre_before[3];
+  double sinv_before[9];
+  double bound_radius;  ///< ball about the centre that holds the body (see Simulator::BodyBound)
+  double motion;
+  double shift;
+};
+}  // namespace lanes
+
 /// Everything the world contributes to one substep.
 struct StepInputs {
   HeadState head;
@@ -69,6 +84,13 @@ struct SpringPair {
 
 class Simulator {
  public:
+  /// How step() advances the chains. Lanes (default): blocks of chains advanced together by loops the
+  /// compiler vectorises (AVX2 when the CPU has it), and the exact per-strip step for the strips that need
+  /// it (a body within reach of a segment's new place, a reaction constraint, a bend over the limit, a spring
+  /// pair outside its band). LanesBaseline: the same without AVX2 (bit-identical to Lanes). Exact: the
+  /// per-strip step for every strip (the reference the tests compare the lanes with).
+  enum class StepPath { Lanes, LanesBaseline, Exact };
+
   /// Throws std::invalid_argument on invalid parameters or hairstyle.
   Simulator(Hairstyle hairstyle, PhysicsParameters parameters, std::vector<Body> bodies = {});
 
@@ -86,6 +108,11 @@ class Simulator {
   /// Throws std::invalid_argument (and keeps the old parameters) on an invalid set or on a different
   /// substep, which needs a new Simulator.
   void setParameters(const PhysicsParameters& parameters);
+
+  void setStepPath(StepPath path) { step_path_ = path; }
+  StepPath stepPath() const { return step_path_; }
+  /// Strips the last step() gave to the exact per-strip step (all of them on the Exact path).
+  int exactStripCount() const { return exact_strips_; }
 
   const Hairstyle& hairstyle() const { return hairstyle_; }
   const PhysicsParameters& parameters() const { return params_; }
@@ -131,6 +158,28 @@ class Simulator {
 
  private:
   void buildChains();
+  /// The blocks of chains for the Lanes path (after buildChains).
+  void buildLanes();
+  /// Constants of one substep shared by the paths (head frame).
+  struct StepFrame {
+    double dt, rho, k, gamma, drag, cos_max_bend, k_c, c_c;
+    Mat3 Rt;
+    Vec3 g, acc0, omega, alpha, air0;
+    bool turbulent;
+  };
+  /// What a substep measured.
+  struct StepTally {
+    double max_rate = 0.0;   ///< rad/s
+    double max_rate2 = 0.0;  ///< largest |w|^2 (rad^2)
+    double max_penetration = 0.0;
+    int penetrations = 0;
+  };
+  /// The exact step of one strip (offset: its first point): the sweep over its columns, resolveCollisions
+  /// for every segment, relaxStrip when its band does not hold.
+  void stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset, StepTally& tally);
+  /// The Lanes path: every block through lanes::stepBlock, the band of every spring pair checked at the new
+  /// places, the strips that passed committed, the others through stepStrip in strip order.
+  void stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally);
   /// Inertia floors (1 / I) and compensated rest directions from the lengths, styled directions and params_.
   void updateSegmentConstants();
   void buildSprings();
@@ -240,6 +289,15 @@ class Simulator {
   double min_ratio_[2] = {1.0, 1.0};
   double max_ratio_[2] = {1.0, 1.0};
   int collisions_ = 0;
+  // The Lanes path: per block of lanes::kLanes chains, its rows, its margin (-1: mixed, all exact) and per
+  // [block][row][lane] the control point (-1: none); per [block][lane] the strip (-1: none).
+  StepPath step_path_ = StepPath::Lanes;
+  int exact_strips_ = 0;
+  std::vector<int> block_rows_, block_margin_, lane_point_, lane_strip_;
+  int lane_stride_rows_ = 0;  ///< rows per block in lane_point_
+  std::vector<Vec3> new_position_, new_direction_, new_rate_, new_velocity_, new_mid_;
+  std::vector<char> strip_exact_;
+  std::vector<lanes::LaneBody> lane_bodies_;  ///< [margin][body], this substep
 };
 
 /// Rotation vector that turns unit a onto unit b (axis a x b, angle in [0, pi]); a deterministic

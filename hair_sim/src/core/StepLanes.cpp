@@ -1,0 +1,384 @@
+#include "StepLanes.hpp"
+
+#include <cmath>
+
+#include "hair_sim/core/Simulator.hpp"
+#include "hair_sim/core/events/EventSchedule.hpp"
+
+// The loops below over kLanes lanes are written for the vectoriser (no calls, selects instead of branches);
+// the few lanes that need atan2 or sin/cos (large angles) are finished by the scalar functions in between.
+// This file is compiled with -fno-math-errno (sqrt vectorises) and -ffp-contract=off (no FMA: the AVX2 and
+// baseline code give the same bits).
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(HAIR_SIM_NO_AVX2)
+#define HAIR_SIM_LANES_AVX2 1
+#endif
+
+namespace hair_sim {
+namespace lanes {
+
+namespace {
+
+constexpr int W = kLanes;
+
+#if defined(__GNUC__)
+#define HAIR_SIM_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define HAIR_SIM_ALWAYS_INLINE inline
+#endif
+
+/// kLanes doubles, and a lane mask (0 or -1 per lane), as GCC vector types: every operation works on all
+/// lanes (SSE2 pairs in the baseline code, AVX2 quads in the AVX2 code).
+typedef double V __attribute__((vector_size(8 * W)));
+typedef long M __attribute__((vector_size(8 * W)));
+static_assert(sizeof(long) == 8, "lane masks are 64-bit");
+
+HAIR_SIM_ALWAYS_INLINE V vsqrt(V x) {
+  V r;
+  for (int l = 0; l < W; ++l) r[l] = __builtin_sqrt(x[l]);
+  return r;
+}
+HAIR_SIM_ALWAYS_INLINE V splat(double x) { return V{} + x; }
+HAIR_SIM_ALWAYS_INLINE V sel(M m, V a, V b) { return m ? a : b; }
+
+/// atan2(s, c) for s >= 0, in [0, pi], within an ulp or two of std::atan2: atan of the ratio by the Cephes
+/// library's reduction (to |x| <= 0.66) and rational approximation; plain arithmetic, so every lane and
+/// both instruction sets give the same bits.
+HAIR_SIM_ALWAYS_INLINE V vatan2(V s, V c) {
+  const V ac = sel(c < 0.0, -c, c);
+  const V x = s / sel(ac > 0.0, ac, splat(1e-300));
+  const M big = x > 2.414213562373095;  // tan(3 pi / 8)
+  const M mid = ~big & (x > 0.66);
+  const double kMoreBits = 6.123233995736765886130e-17;
+  const V xr = sel(big, -1.0 / sel(big, x, splat(1.0)), sel(mid, (x - 1.0) / (x + 1.0), x));
+  const V y0 = sel(big, splat(1.5707963267948966), sel(mid, splat(0.7853981633974483), splat(0.0)));
+  const V more = sel(big, splat(kMoreBits), sel(mid, splat(0.5 * kMoreBits), splat(0.0)));
+  const V z = xr * xr;
+  const V pp =
+      (((-8.750608600031904122785e-1 * z + -1.615753718733365076637e1) * z + -7.500855792314704667340e1) * z +
+       -1.228866684490136173410e2) *
+          z +
+      -6.485021904942025371773e1;
+  const V qq =
+      ((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z + 4.328810604912902668951e2) *
+           z +
+       4.853903996359136964868e2) *
+          z +
+      1.945506571482613964425e2;
+  const V a = y0 + (more + (xr * (z * pp / qq) + xr));
+  return sel(c < 0.0, 3.141592653589793 - a, a);
+}
+
+/// Does the straight path q0 -> q1 (sphere space) enter the unit sphere from outside? (Lane form of the
+/// Simulator's pathEntersUnitSphere.)
+HAIR_SIM_ALWAYS_INLINE M pathEnters(V q0x, V q0y, V q0z, V q1x, V q1y, V q1z) {
+  const V c = (q0x * q0x + q0y * q0y + q0z * q0z) - 1.0;
+  const V dx = q1x - q0x, dy = q1y - q0y, dz = q1z - q0z;
+  const V a = dx * dx + dy * dy + dz * dz;
+  const V b = q0x * dx + q0y * dy + q0z * dz;
+  const V disc = b * b - a * c;
+  const V root = vsqrt(sel(disc > 0.0, disc, splat(0.0)));
+  const M a_ok = a >= 1e-300;
+  const V t = (-b - root) / sel(a_ok, a, splat(1.0));
+  return (c > 0.0) & a_ok & (b < 0.0) & (disc >= 0.0) & (t <= 1.0);
+}
+
+HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
+  const double dt = job.dt, rho = job.rho, k = job.k, gamma = job.gamma, drag = job.drag;
+  const double max_step = job.max_angle_step, cos_max_bend = job.cos_max_bend;
+  const double gx = job.g[0], gy = job.g[1], gz = job.g[2];
+  const double ax0 = job.acc0[0], ay0 = job.acc0[1], az0 = job.acc0[2];
+  const double ox = job.omega[0], oy = job.omega[1], oz = job.omega[2];
+  const double lx = job.alpha[0], ly = job.alpha[1], lz = job.alpha[2];
+  const double rx0 = job.air0[0], ry0 = job.air0[1], rz0 = job.air0[2];
+
+  V px, py, pz;  // pivot: the parent's new position
+  V q0 = splat(1.0), q1 = splat(0.0), q2 = splat(0.0), q3 = splat(0.0), q4 = splat(1.0), q5 = splat(0.0),
+    q6 = splat(0.0), q7 = splat(0.0), q8 = splat(1.0);  // rotation of the parent from its styled frame
+  M flag = M{} & 0;
+  for (int l = 0; l < W; ++l) {
+    const int i0 = job.point[l];
+    const Vec3 p = i0 >= 0 ? job.positions[i0] : Vec3::Zero();
+    px[l] = p.x(), py[l] = p.y(), pz[l] = p.z();
+  }
+
+  for (int r = 1; r < job.rows; ++r) {
+    const int* pt = job.point + r * W;
+    V nx, ny, nz, vx, vy, vz, wx, wy, wz, fx, fy, fz, ux, uy, uz, sx, sy, sz, mx, my, mz, ex, ey, ez, d, ii;
+    M active;
+    bool any_active = false;
+    for (int l = 0; l < W; ++l) {
+      const int i = pt[l];
+      active[l] = i >= 0 ? -1 : 0;
+      if (i >= 0) {
+        any_active = true;
+        const Vec3& n = job.direction[i];
+        const Vec3& v = job.velocity[i];
+        const Vec3& w = job.rate[i];
+        const Vec3& f = job.spring_force[i];
+        const Vec3& u = job.rest_dir[i];
+        const Vec3& s = job.styled_dir[i];
+        const Vec3& m = job.previous_mid[i];
+        const Vec3& e = job.positions[i];
+        nx[l] = n.x(), ny[l] = n.y(), nz[l] = n.z();
+        vx[l] = v.x(), vy[l] = v.y(), vz[l] = v.z();
+        wx[l] = w.x(), wy[l] = w.y(), wz[l] = w.z();
+        fx[l] = f.x(), fy[l] = f.y(), fz[l] = f.z();
+        ux[l] = u.x(), uy[l] = u.y(), uz[l] = u.z();
+        sx[l] = s.x(), sy[l] = s.y(), sz[l] = s.z();
+        mx[l] = m.x(), my[l] = m.y(), mz[l] = m.z();
+        ex[l] = e.x(), ey[l] = e.y(), ez[l] = e.z();
+        d[l] = job.length[i];
+        ii[l] = job.inv_inertia[i];
+      } else {  // an idle lane: a still vertical segment, never written back
+        nx[l] = 0.0, ny[l] = 0.0, nz[l] = 1.0;
+        vx[l] = vy[l] = vz[l] = wx[l] = wy[l] = wz[l] = fx[l] = fy[l] = fz[l] = 0.0;
+        ux[l] = 0.0, uy[l] = 0.0, uz[l] = 1.0;
+        sx[l] = 0.0, sy[l] = 0.0, sz[l] = 1.0;
+        mx[l] = px[l], my[l] = py[l], mz[l] = pz[l] + 0.5;
+        ex[l] = px[l], ey[l] = py[l], ez[l] = pz[l] + 1.0;
+        d[l] = 1.0;
+        ii[l] = 0.0;
+      }
+    }
+    if (!any_active) break;
+
+    // Segment midpoints; the turbulence is evaluated there (world points), lane by lane.
+    const V hd = 0.5 * d;
+    const V cx = px + hd * nx, cy = py + hd * ny, cz = pz + hd * nz;
+    V tx = splat(0.0), ty = splat(0.0), tz = splat(0.0);
+    if (job.turbulence)
+      for (int l = 0; l < W; ++l) {
+        if (pt[l] < 0) continue;
+        const Vec3 t =
+            *job.head_rotation_inverse * job.turbulence->at(*job.head_pose * Vec3(cx[l], cy[l], cz[l]));
+        tx[l] = t.x(), ty[l] = t.y(), tz[l] = t.z();
+      }
+
+    // (6) force: alpha x mid, omega x mid, omega x (omega x mid), omega x v.
+    const V amx = ly * cz - lz * cy, amy = lz * cx - lx * cz, amz = lx * cy - ly * cx;
+    const V omx = oy * cz - oz * cy, omy = oz * cx - ox * cz, omz = ox * cy - oy * cx;
+    const V oomx = oy * omz - oz * omy, oomy = oz * omx - ox * omz, oomz = ox * omy - oy * omx;
+    const V ovx = oy * vz - oz * vy, ovy = oz * vx - ox * vz, ovz = ox * vy - oy * vx;
+    const V acx = -ax0 - amx - oomx - 2.0 * ovx;
+    const V acy = -ay0 - amy - oomy - 2.0 * ovy;
+    const V acz = -az0 - amz - oomz - 2.0 * ovz;
+    const V airx = (rx0 - omx) + tx, airy = (ry0 - omy) + ty, airz = (rz0 - omz) + tz;
+    const V rd = rho * d, dd = d * drag;
+    const V Fx = rd * (gx + acx) + dd * (airx - vx) + fx;
+    const V Fy = rd * (gy + acy) + dd * (airy - vy) + fy;
+    const V Fz = rd * (gz + acz) + dd * (airz - vz) + fz;
+    // (4)-(5) its moment at the lever d/2.
+    V Mx = hd * (ny * Fz - nz * Fy);
+    V My = hd * (nz * Fx - nx * Fz);
+    V Mz = hd * (nx * Fy - ny * Fx);
+    // (3) the hinge: rest direction carried by the parent, rotationVectorBetween(rest, n) by its small-angle
+    // series (the lanes outside it by the scalar function).
+    const V restx = q0 * ux + q1 * uy + q2 * uz;
+    const V resty = q3 * ux + q4 * uy + q5 * uz;
+    const V restz = q6 * ux + q7 * uy + q8 * uz;
+    const V axx = resty * nz - restz * ny, axy = restz * nx - restx * nz, axz = restx * ny - resty * nx;
+    const V c = restx * nx + resty * ny + restz * nz;
+    const V s2 = axx * axx + axy * axy + axz * axz;
+    const V c2 = c * c;
+    const M series = (c > 0.0) & (s2 > 1e-24) & (s2 < 0.01 * c2);
+    const V x2 = s2 / sel(c2 > 0.0, c2, splat(1.0));
+    V p = splat(1.0 / 17.0);
+    p = p * x2 - 1.0 / 15.0;
+    p = p * x2 + 1.0 / 13.0;
+    p = p * x2 - 1.0 / 11.0;
+    p = p * x2 + 1.0 / 9.0;
+    p = p * x2 - 1.0 / 7.0;
+    p = p * x2 + 1.0 / 5.0;
+    p = p * x2 - 1.0 / 3.0;
+    p = p * x2 + 1.0;
+    // Outside the series: angle = atan2(s, c) by vatan2 (s > 1e-12); a zero rotation for s <= 1e-12, c > 0;
+    // opposite directions (s <= 1e-12, c <= 0) by the scalar function.
+    const V sn = vsqrt(s2);
+    const M has_axis = sn > 1e-12;
+    const V scale = sel(series, p / sel(c != 0.0, c, splat(1.0)),
+                        sel(has_axis, vatan2(sn, c) / sel(has_axis, sn, splat(1.0)), splat(0.0)));
+    const M opposite = ~series & ~has_axis & ~(c > 0.0);
+    V hx = axx * scale, hy = axy * scale, hz = axz * scale;
+    for (int l = 0; l < W; ++l)
+      if (opposite[l]) {
+        const Vec3 h = rotationVectorBetween(Vec3(restx[l], resty[l], restz[l]), Vec3(nx[l], ny[l], nz[l]));
+        hx[l] = h.x(), hy[l] = h.y(), hz[l] = h.z();
+      }
+
+    // (7): the new rate w (without a part along n, limited to max_angle_step) and the new direction,
+    // rotateByVector(w, n) by its series for the small turns (the other lanes by the scalar function).
+    Mx = Mx - k * hx, My = My - k * hy, Mz = Mz - k * hz;
+    const V mn = Mx * nx + My * ny + Mz * nz;
+    Mx = Mx - mn * nx, My = My - mn * ny, Mz = Mz - mn * nz;
+    const V keep = 1.0 - gamma * dt * ii, push = (dt * dt) * ii;
+    V Wx = wx * keep + push * Mx, Wy = wy * keep + push * My, Wz = wz * keep + push * Mz;
+    const V wn = Wx * nx + Wy * ny + Wz * nz;
+    Wx = Wx - wn * nx, Wy = Wy - wn * ny, Wz = Wz - wn * nz;
+    const V step_angle = vsqrt(Wx * Wx + Wy * Wy + Wz * Wz);
+    const M over = step_angle > max_step;
+    const V limit = max_step / sel(over, step_angle, splat(1.0));
+    Wx = sel(over, Wx * limit, Wx), Wy = sel(over, Wy * limit, Wy), Wz = sel(over, Wz * limit, Wz);
+    const V a2 = Wx * Wx + Wy * Wy + Wz * Wz;
+    const M small = a2 < 0.01;
+    const M tiny = a2 < 1e-24;
+    const V crx = Wy * nz - Wz * ny, cry = Wz * nx - Wx * nz, crz = Wx * ny - Wy * nx;
+    const V co =
+        1.0 + a2 * (-1.0 / 2.0 +
+                    a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0 + a2 * (-1.0 / 3628800.0)))));
+    const V sa =
+        1.0 +
+        a2 * (-1.0 / 6.0 +
+              a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0 + a2 * (1.0 / 362880.0 + a2 * (-1.0 / 39916800.0)))));
+    const V ca = 0.5 + a2 * (-1.0 / 24.0 +
+                             a2 * (1.0 / 720.0 + a2 * (-1.0 / 40320.0 +
+                                                       a2 * (1.0 / 3628800.0 + a2 * (-1.0 / 479001600.0)))));
+    const V wv = (Wx * nx + Wy * ny + Wz * nz) * ca;
+    V bx = (nx * co + crx * sa) + Wx * wv;
+    V by = (ny * co + cry * sa) + Wy * wv;
+    V bz = (nz * co + crz * sa) + Wz * wv;
+    bx = sel(tiny, nx + crx, bx), by = sel(tiny, ny + cry, by), bz = sel(tiny, nz + crz, bz);
+    const V len = vsqrt(bx * bx + by * by + bz * bz);
+    V kx = bx / len, ky = by / len, kz = bz / len;
+    for (int l = 0; l < W; ++l)
+      if (!small[l]) {
+        const Vec3 next = rotateByVector(Vec3(Wx[l], Wy[l], Wz[l]), Vec3(nx[l], ny[l], nz[l])).normalized();
+        kx[l] = next.x(), ky[l] = next.y(), kz[l] = next.z();
+      }
+
+    // The bend limit (a lane over it goes to the exact step), the new end, and the next segment's rest
+    // frame Q = minimalRotation(Q styled, next) Q = (c I + [v]x + v h^T) Q, v = Q styled x next, h = v / (1 +
+    // c).
+    const V bend = restx * kx + resty * ky + restz * kz;
+    const V nex = px + d * kx, ney = py + d * ky, nez = pz + d * kz;
+    M bad = bend < cos_max_bend;
+    if (r + 1 < job.rows) {
+      const V ax = q0 * sx + q1 * sy + q2 * sz;
+      const V ay = q3 * sx + q4 * sy + q5 * sz;
+      const V az = q6 * sx + q7 * sy + q8 * sz;
+      const V cq = ax * kx + ay * ky + az * kz;
+      bad = bad | (cq < -1.0 + 1e-9);
+      const V vx1 = ay * kz - az * ky, vy1 = az * kx - ax * kz, vz1 = ax * ky - ay * kx;
+      const V den = sel(1.0 + cq > 1e-300, 1.0 + cq, splat(1.0));
+      const V hx1 = vx1 / den, hy1 = vy1 / den, hz1 = vz1 / den;
+      const V r00 = vx1 * hx1 + cq, r01 = vx1 * hy1 - vz1, r02 = vx1 * hz1 + vy1;
+      const V r10 = vy1 * hx1 + vz1, r11 = vy1 * hy1 + cq, r12 = vy1 * hz1 - vx1;
+      const V r20 = vz1 * hx1 - vy1, r21 = vz1 * hy1 + vx1, r22 = vz1 * hz1 + cq;
+      const V n0 = r00 * q0 + r01 * q3 + r02 * q6, n1 = r00 * q1 + r01 * q4 + r02 * q7,
+              n2 = r00 * q2 + r01 * q5 + r02 * q8;
+      const V n3 = r10 * q0 + r11 * q3 + r12 * q6, n4 = r10 * q1 + r11 * q4 + r12 * q7,
+              n5 = r10 * q2 + r11 * q5 + r12 * q8;
+      const V n6 = r20 * q0 + r21 * q3 + r22 * q6, n7 = r20 * q1 + r21 * q4 + r22 * q7,
+              n8 = r20 * q2 + r21 * q5 + r22 * q8;
+      q0 = n0, q1 = n1, q2 = n2, q3 = n3, q4 = n4, q5 = n5, q6 = n6, q7 = n7, q8 = n8;
+    }
+    flag = flag | (bad & active);
+
+    // Bodies: the quick reject of Simulator::prepareBodies, then for the bodies within reach its exact
+    // tests: the end inside now (reaction constraint), or the new segment / the end's path over the
+    // substep not clear of the body (Simulator::clearOf): the exact step decides.
+    V reach_prev = splat(0.0);
+    if (job.have_before) {
+      const V gx1 = ex - px, gy1 = ey - py, gz1 = ez - pz;
+      reach_prev = vsqrt(gx1 * gx1 + gy1 * gy1 + gz1 * gz1);
+    }
+    for (int b = 0; b < job.body_count; ++b) {
+      const LaneBody& B = job.bodies[b];
+      const V dx = px - B.centre[0], dy = py - B.centre[1], dz = pz - B.centre[2];
+      const V dist2 = dx * dx + dy * dy + dz * dz;
+      const V rch = B.bound_radius + d;
+      M far = dist2 > rch * rch;
+      if (job.have_before) {
+        const V lim = B.bound_radius + (reach_prev + B.shift) * (1.0 + B.motion);
+        const double keep_b = 1.0 - B.motion;
+        far = B.motion < 0.5 ? (far & (dist2 * (keep_b * keep_b) > lim * lim)) : (far & 0);
+      }
+      const M reach = ~far & active;
+      bool near_any = false;
+      for (int l = 0; l < W; ++l) near_any |= reach[l] != 0;
+      if (!near_any) continue;
+      const double* S = B.sinv;
+      const double* Sb = B.sinv_before;
+      const V qx = S[0] * dx + S[1] * dy + S[2] * dz;
+      const V qy = S[3] * dx + S[4] * dy + S[5] * dz;
+      const V qz = S[6] * dx + S[7] * dy + S[8] * dz;
+      const V n2 = qx * qx + qy * qy + qz * qz;
+      const M pivot_inside = n2 < 1.0;
+      const V lim = 1.0 + d / B.min_radius + 1e-9;
+      M far2 = n2 > lim * lim;
+      V bx1 = splat(0.0), by1 = splat(0.0), bz1 = splat(0.0);
+      if (job.have_before) {
+        const V ddx = ex - B.centre_before[0], ddy = ey - B.centre_before[1], ddz = ez - B.centre_before[2];
+        bx1 = Sb[0] * ddx + Sb[1] * ddy + Sb[2] * ddz;
+        by1 = Sb[3] * ddx + Sb[4] * ddy + Sb[5] * ddz;
+        bz1 = Sb[6] * ddx + Sb[7] * ddy + Sb[8] * ddz;
+        const V spare = vsqrt(n2) - 1.0 - 1e-9;
+        const V gx1 = bx1 - qx, gy1 = by1 - qy, gz1 = bz1 - qz;
+        far2 = far2 & (gx1 * gx1 + gy1 * gy1 + gz1 * gz1 < spare * spare);
+      }
+      // The end now (reaction constraint while inside) and the new end, in sphere space.
+      const V snx = S[0] * nx + S[1] * ny + S[2] * nz;
+      const V sny = S[3] * nx + S[4] * ny + S[5] * nz;
+      const V snz = S[6] * nx + S[7] * ny + S[8] * nz;
+      const V cx1 = qx + d * snx, cy1 = qy + d * sny, cz1 = qz + d * snz;
+      const M inside_now = cx1 * cx1 + cy1 * cy1 + cz1 * cz1 < 1.0;
+      const V skx = S[0] * kx + S[1] * ky + S[2] * kz;
+      const V sky = S[3] * kx + S[4] * ky + S[5] * kz;
+      const V skz = S[6] * kx + S[7] * ky + S[8] * kz;
+      const V qex = qx + d * skx, qey = qy + d * sky, qez = qz + d * skz;
+      const M end_in = (qex * qex + qey * qey + qez * qez) - 1.0 <= 1e-12;
+      const M cuts = ~pivot_inside & pathEnters(qx, qy, qz, qex, qey, qez);
+      M swept = M{} & 0;
+      if (job.have_before) swept = ~pivot_inside & pathEnters(bx1, by1, bz1, qex, qey, qez);
+      flag = flag | (reach & ~far2 & (inside_now | end_in | cuts | swept));
+    }
+
+    // The state at the end of the substep; the new ends are the next row's pivots.
+    const V midx = px + hd * kx, midy = py + hd * ky, midz = pz + hd * kz;
+    const V velx = (midx - mx) / dt, vely = (midy - my) / dt, velz = (midz - mz) / dt;
+    for (int l = 0; l < W; ++l) {
+      const int i = pt[l];
+      if (i < 0) continue;
+      job.out_direction[i] = Vec3(kx[l], ky[l], kz[l]);
+      job.out_rate[i] = Vec3(Wx[l], Wy[l], Wz[l]);
+      job.out_position[i] = Vec3(nex[l], ney[l], nez[l]);
+      job.out_velocity[i] = Vec3(velx[l], vely[l], velz[l]);
+      job.out_mid[i] = Vec3(midx[l], midy[l], midz[l]);
+    }
+    px = nex, py = ney, pz = nez;
+  }
+  for (int l = 0; l < W; ++l) job.flag[l] = flag[l] != 0;
+}
+
+void stepBlockBaseline(BlockJob& job) { blockBody(job); }
+
+#if defined(HAIR_SIM_LANES_AVX2)
+__attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) { blockBody(job); }
+#endif
+
+}  // namespace
+
+bool haveAvx2() {
+#if defined(HAIR_SIM_LANES_AVX2)
+  static const bool has = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
+  return has;
+#else
+  return false;
+#endif
+}
+
+void stepBlock(BlockJob& job, bool baseline_only) {
+#if defined(HAIR_SIM_LANES_AVX2)
+  if (!baseline_only && haveAvx2()) {
+    stepBlockAvx2(job);
+    return;
+  }
+#endif
+  (void)baseline_only;
+  stepBlockBaseline(job);
+}
+
+}  // namespace lanes
+}  // namespace hair_sim

@@ -1,0 +1,67 @@
+#pragma once
+/// Internal to the core: Simulator::step's structure-of-arrays path. The chains (columns of control points)
+/// are taken kLanes at a time and every row of a block is advanced with loops over the lanes that the
+/// compiler vectorises: the free update of the angular dynamics (1)-(7) with the forces (6), the springs'
+/// force (11), the hinge, the step limit, and the tests that decide whether the exact per-strip step
+/// (Simulator::stepStrip) must take over: a reaction constraint (8)-(10) in force, a bend over the limit, a
+/// segment or the path of its end meeting a body. The same loops are compiled for the x86-64 baseline and
+/// for AVX2 and chosen at run time; without FMA contraction both give bit-identical results.
+#include <cstddef>
+
+#include "hair_sim/core/Simulator.hpp"
+
+namespace hair_sim {
+
+class WindField;
+
+namespace lanes {
+
+/// Chains per block.
+constexpr int kLanes = 4;
+
+/// One block of kLanes chains. Arrays of Vec3 are the Simulator's per-point arrays (head frame).
+struct BlockJob {
+  // Constants of the substep (head frame).
+  double dt, rho, k, gamma, drag, max_angle_step, cos_max_bend;
+  double g[3], acc0[3], omega[3], alpha[3], air0[3];
+  /// Rows of the longest chain in the block (>= 2).
+  int rows = 0;
+  /// [rows][kLanes]: control point of each row of each lane (row 0: the root), -1 past a chain's end or for
+  /// an empty lane.
+  const int* point = nullptr;
+  // The state at the start of the substep and the segment constants.
+  const Vec3* positions = nullptr;
+  const Vec3* direction = nullptr;
+  const Vec3* velocity = nullptr;
+  const Vec3* rate = nullptr;
+  const Vec3* previous_mid = nullptr;
+  const Vec3* spring_force = nullptr;
+  const Vec3* rest_dir = nullptr;
+  const Vec3* styled_dir = nullptr;
+  const double* length = nullptr;
+  const double* inv_inertia = nullptr;
+  // The state at the end of the substep (written for the block's points).
+  Vec3* out_position = nullptr;
+  Vec3* out_direction = nullptr;
+  Vec3* out_rate = nullptr;
+  Vec3* out_velocity = nullptr;
+  Vec3* out_mid = nullptr;
+  /// Bodies for the block's thickness margin.
+  const LaneBody* bodies = nullptr;
+  int body_count = 0;
+  bool have_before = false;
+  /// Turbulence at world points (null: none), the head pose and its inverse rotation.
+  const WindField* turbulence = nullptr;
+  const Iso3* head_pose = nullptr;
+  const Mat3* head_rotation_inverse = nullptr;
+  /// Out: per lane, nonzero when the exact step must take the lane's strip.
+  unsigned char flag[kLanes] = {};
+};
+
+/// Advances one block (AVX2 when the CPU has it unless baseline_only).
+void stepBlock(BlockJob& job, bool baseline_only);
+/// Whether stepBlock uses AVX2 on this CPU.
+bool haveAvx2();
+
+}  // namespace lanes
+}  // namespace hair_sim
