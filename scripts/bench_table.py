@@ -24,14 +24,19 @@ def main():
     if len(sys.argv) > 2:
         with open(sys.argv[2]) as f:
             node = json.load(f)
-    lines = ['| strips | control points | ns per control-point update | real-time factor at 240 Hz |',
-             '|---|---|---|---|']
+    lines = ['| strips | control points | ns per control-point update | real-time factor at 240 Hz '
+             '| strips in the exact step | exact step alone, ns per update (ratio) |',
+             '|---|---|---|---|---|---|']
     for name in sorted((n for n in bench if n.startswith('BM_Step/')), key=lambda n: int(n.split('/')[1])):
         b = bench[name]
         ns = 1e9 / b['items_per_second']
         points = int(b['control_points'])
-        lines.append('| %s | %s | %.0f | %.2f |' % (format(int(b['strips']), ','), format(points, ','), ns,
-                                                     1.0 / (ns * 1e-9 * points * SUBSTEP_RATE)))
+        exact = bench.get(name.replace('BM_Step/', 'BM_StepExact/'))
+        exact_ns = '%.0f (%.2f x)' % (1e9 / exact['items_per_second'], 1e9 / exact['items_per_second'] / ns) \
+            if exact else '-'
+        lines.append('| %s | %s | %.0f | %.2f | %.1f %% | %s |' % (
+            format(int(b['strips']), ','), format(points, ','), ns, 1.0 / (ns * 1e-9 * points * SUBSTEP_RATE),
+            100.0 * b.get('exact_share', 0.0), exact_ns))
     lines += ['', '| tessellation (default hairstyle and level of detail) | ns per vertex |', '|---|---|']
     for name in ('BM_Tessellate_CachedBasis', 'BM_Tessellate_ForwardDifferencing', 'BM_Tessellate_DeBoor'):
         if name in bench:

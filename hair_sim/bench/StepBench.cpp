@@ -34,11 +34,12 @@ void BM_Setup(benchmark::State& state) {
 }
 BENCHMARK(BM_Setup)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
 
-void BM_Step(benchmark::State& state) {
+void runStep(benchmark::State& state, Simulator::StepPath path) {
   const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
   Iso3 rest = Iso3::Identity();
   rest.translation() = Vec3(0.0, 0.0, 1.6);
   Simulator sim(benchHairstyle(config, static_cast<int>(state.range(0))), config.physics, config.bodies);
+  sim.setStepPath(path);
   HeadMotionEstimator head;
   head.reset(rest);
   const double dt = config.physics.substep;
@@ -63,6 +64,14 @@ void BM_Step(benchmark::State& state) {
   state.counters["exact_share"] =
       exact / (static_cast<double>(n) * static_cast<double>(sim.hairstyle().strips.size()));
 }
+/// The default path (Simulator::StepPath::Lanes).
+void BM_Step(benchmark::State& state) { runStep(state, Simulator::StepPath::Lanes); }
 BENCHMARK(BM_Step)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
+/// Every strip through the exact per-strip step (the path before the lanes), for the ratio in one run.
+void BM_StepExact(benchmark::State& state) { runStep(state, Simulator::StepPath::Exact); }
+BENCHMARK(BM_StepExact)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
+/// The lanes without AVX2 (what a CPU without it runs).
+void BM_StepBaseline(benchmark::State& state) { runStep(state, Simulator::StepPath::LanesBaseline); }
+BENCHMARK(BM_StepBaseline)->Arg(1000)->Unit(benchmark::kMillisecond);
 
 }  // namespace
