@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
@@ -270,7 +271,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   // the strip and with the earlier strips, already final (with 1e-9 relative to spare; pairs with a root are
   // never moved, so never kept); otherwise it takes the exact step, which, like the lanes, sees the later
   // strips as not yet moved. So both paths take the same decisions.
-  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
   double max_rate2 = 0.0;
   exact_strips_ = 0;
   for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
@@ -278,23 +278,13 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     const int first = strip_offset_[si] + s.columns;
     const int end = strip_offset_[si] + s.pointCount();
     bool exact = strip_exact_[si] != 0;
-    for (int i = first; i < end && !exact; ++i) {
-      for (int q = partner_start_[static_cast<std::size_t>(i)];
-           q < partner_start_[static_cast<std::size_t>(i) + 1]; ++q) {
-        const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
-        const std::size_t t = static_cast<std::size_t>(strip_of_point_[j]);
-        if (t > si) continue;  // kept by strip t
-        if (static_cast<int>(j) - strip_offset_[t] < hairstyle_.strips[t].columns) continue;  // a root
-        const Vec3& other = t == si ? new_position_[j] : positions_[j];
-        const double signed_rest = partner_rest_[static_cast<std::size_t>(q)];
-        const double rest = std::abs(signed_rest);
-        const double dist2 = (new_position_[static_cast<std::size_t>(i)] - other).squaredNorm();
-        const double near = lo * rest, far = hi * rest;
-        if (dist2 < near * near * (1.0 + 1e-9) || (signed_rest > 0.0 && dist2 > far * far * (1.0 - 1e-9))) {
-          exact = true;
-          break;
-        }
-      }
+    for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1] && !exact; ++q) {
+      const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
+      const Vec3& a = new_position_[static_cast<std::size_t>(bp.later)];
+      const Vec3& b = bp.same_strip ? new_position_[static_cast<std::size_t>(bp.earlier)]
+                                    : positions_[static_cast<std::size_t>(bp.earlier)];
+      const double dist2 = (a - b).squaredNorm();
+      exact = dist2 < bp.near2 || dist2 > bp.far2;
     }
     if (exact) {
       stepStrip(in, f, si, strip_offset_[si], tally);
@@ -358,7 +348,10 @@ void Simulator::setParameters(const PhysicsParameters& parameters) {
                                parameters.spring_max_pairs != params_.spring_max_pairs;
   params_ = parameters;
   updateSegmentConstants();
-  if (pairing_changed) buildSprings();
+  if (pairing_changed)
+    buildSprings();
+  else
+    buildBandPairs();  // the band's factors may have changed
 }
 
 void Simulator::reset() {
@@ -537,6 +530,39 @@ void Simulator::buildSprings() {
     partner_index_[fb] = p.a;
     partner_rest_[fb] = p.within_strip ? p.rest : -p.rest;
   }
+  buildBandPairs();
+}
+
+void Simulator::buildBandPairs() {
+  // Per strip, the spring pairs whose later point in the sweep is in it, neither point a root (roots never
+  // move, so the exact step never keeps such a pair), with the squared band edges (1e-9 relative to spare).
+  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
+  band_pairs_.clear();
+  band_pair_start_.assign(hairstyle_.strips.size() + 1, 0);
+  auto isRoot = [&](int k) {
+    const std::size_t t = static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(k)]);
+    return k - strip_offset_[t] < hairstyle_.strips[t].columns;
+  };
+  std::vector<BandPair> pairs;
+  for (const SpringPair& p : springs_) {
+    if (isRoot(p.a) || isRoot(p.b)) continue;
+    BandPair bp;
+    bp.later = std::max(p.a, p.b);  // points are numbered strip by strip
+    bp.earlier = std::min(p.a, p.b);
+    bp.near2 = (lo * p.rest) * (lo * p.rest) * (1.0 + 1e-9);
+    bp.far2 = p.within_strip ? (hi * p.rest) * (hi * p.rest) * (1.0 - 1e-9)
+                             : std::numeric_limits<double>::infinity();
+    bp.same_strip = strip_of_point_[static_cast<std::size_t>(bp.later)] ==
+                    strip_of_point_[static_cast<std::size_t>(bp.earlier)];
+    pairs.push_back(bp);
+    ++band_pair_start_[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)]) + 1];
+  }
+  for (std::size_t t = 0; t < hairstyle_.strips.size(); ++t) band_pair_start_[t + 1] += band_pair_start_[t];
+  band_pairs_.resize(pairs.size());
+  std::vector<int> fill(band_pair_start_.begin(), band_pair_start_.end() - 1);
+  for (const BandPair& bp : pairs)
+    band_pairs_[static_cast<std::size_t>(
+        fill[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)])]++)] = bp;
 }
 
 void Simulator::computeSpringForces() {

@@ -183,6 +183,8 @@ class Simulator {
   /// Inertia floors (1 / I) and compensated rest directions from the lengths, styled directions and params_.
   void updateSegmentConstants();
   void buildSprings();
+  /// band_pairs_ from springs_ and the band's factors (end of buildSprings, setParameters).
+  void buildBandPairs();
   void computeSpringForces();
   /// The valid direction nearest to dir (bisection toward an escape direction) for the bodies.
   template <typename ValidFor, typename ValidAll>
@@ -267,6 +269,14 @@ class Simulator {
   std::vector<int> partner_start_;  ///< CSR: partners of point k are [start[k], start[k+1])
   std::vector<int> partner_index_;
   std::vector<double> partner_rest_;
+  /// stepLanes' band check: a spring pair by the strip of its later point, neither a root.
+  struct BandPair {
+    int later = 0, earlier = 0;
+    double near2 = 0.0, far2 = 0.0;  ///< squared band edges, 1e-9 relative to spare
+    bool same_strip = false;
+  };
+  std::vector<BandPair> band_pairs_;
+  std::vector<int> band_pair_start_;  ///< per strip, CSR into band_pairs_
   /// prepareBodies' quick reject of a body in the head frame, before its sphere-space test: a ball about
   /// its centre that holds it, and how far the body's motion over the substep carries a point near it.
   struct BodyBound {
