@@ -26,32 +26,52 @@ constexpr int W = kLanes;
 #define HAIR_SIM_ALWAYS_INLINE inline
 #endif
 
-/// kLanes doubles, and a lane mask (0 or -1 per lane), as GCC vector types: every operation works on all
-/// lanes (SSE2 pairs in the baseline code, AVX2 quads in the AVX2 code).
-typedef double V __attribute__((vector_size(8 * W)));
-typedef long M __attribute__((vector_size(8 * W)));
+// N lanes of doubles (V) and their masks (M, 0 or -1 per lane) are GCC vector types: every operation works
+// on all lanes at once. The AVX2 code takes N = 4 (one ymm register), the baseline code N = 2 (one xmm),
+// twice per block: the lanes never mix, so the results are the same.
 static_assert(sizeof(long) == 8, "lane masks are 64-bit");
+template <int N>
+struct VecTypes;
+template <>
+struct VecTypes<2> {
+  typedef double V __attribute__((vector_size(16)));
+  typedef long M __attribute__((vector_size(16)));
+};
+template <>
+struct VecTypes<4> {
+  typedef double V __attribute__((vector_size(32)));
+  typedef long M __attribute__((vector_size(32)));
+};
 
+template <class V>
 HAIR_SIM_ALWAYS_INLINE V vsqrt(V x) {
   V r;
-  for (int l = 0; l < W; ++l) r[l] = __builtin_sqrt(x[l]);
+  for (int l = 0; l < static_cast<int>(sizeof(V) / sizeof(double)); ++l) r[l] = __builtin_sqrt(x[l]);
   return r;
 }
-HAIR_SIM_ALWAYS_INLINE V splat(double x) { return V{} + x; }
-HAIR_SIM_ALWAYS_INLINE V sel(M m, V a, V b) { return m ? a : b; }
+template <class V>
+HAIR_SIM_ALWAYS_INLINE V splat(double x) {
+  return V{} + x;
+}
+template <class M, class V>
+HAIR_SIM_ALWAYS_INLINE V sel(M m, V a, V b) {
+  return m ? a : b;
+}
 
 /// atan2(s, c) for s >= 0, in [0, pi], within an ulp or two of std::atan2: atan of the ratio by the Cephes
 /// library's reduction (to |x| <= 0.66) and rational approximation; plain arithmetic, so every lane and
 /// both instruction sets give the same bits.
+template <class V>
 HAIR_SIM_ALWAYS_INLINE V vatan2(V s, V c) {
+  typedef decltype(V{} < V{}) M;
   const V ac = sel(c < 0.0, -c, c);
-  const V x = s / sel(ac > 0.0, ac, splat(1e-300));
+  const V x = s / sel(ac > 0.0, ac, splat<V>(1e-300));
   const M big = x > 2.414213562373095;  // tan(3 pi / 8)
   const M mid = ~big & (x > 0.66);
   const double kMoreBits = 6.123233995736765886130e-17;
-  const V xr = sel(big, -1.0 / sel(big, x, splat(1.0)), sel(mid, (x - 1.0) / (x + 1.0), x));
-  const V y0 = sel(big, splat(1.5707963267948966), sel(mid, splat(0.7853981633974483), splat(0.0)));
-  const V more = sel(big, splat(kMoreBits), sel(mid, splat(0.5 * kMoreBits), splat(0.0)));
+  const V xr = sel(big, -1.0 / sel(big, x, splat<V>(1.0)), sel(mid, (x - 1.0) / (x + 1.0), x));
+  const V y0 = sel(big, splat<V>(1.5707963267948966), sel(mid, splat<V>(0.7853981633974483), splat<V>(0.0)));
+  const V more = sel(big, splat<V>(kMoreBits), sel(mid, splat<V>(0.5 * kMoreBits), splat<V>(0.0)));
   const V z = xr * xr;
   const V pp =
       (((-8.750608600031904122785e-1 * z + -1.615753718733365076637e1) * z + -7.500855792314704667340e1) * z +
@@ -70,19 +90,25 @@ HAIR_SIM_ALWAYS_INLINE V vatan2(V s, V c) {
 
 /// Does the straight path q0 -> q1 (sphere space) enter the unit sphere from outside? (Lane form of the
 /// Simulator's pathEntersUnitSphere.)
-HAIR_SIM_ALWAYS_INLINE M pathEnters(V q0x, V q0y, V q0z, V q1x, V q1y, V q1z) {
+template <class V>
+HAIR_SIM_ALWAYS_INLINE auto pathEnters(V q0x, V q0y, V q0z, V q1x, V q1y, V q1z) -> decltype(V{} < V{}) {
+  typedef decltype(V{} < V{}) M;
   const V c = (q0x * q0x + q0y * q0y + q0z * q0z) - 1.0;
   const V dx = q1x - q0x, dy = q1y - q0y, dz = q1z - q0z;
   const V a = dx * dx + dy * dy + dz * dz;
   const V b = q0x * dx + q0y * dy + q0z * dz;
   const V disc = b * b - a * c;
-  const V root = vsqrt(sel(disc > 0.0, disc, splat(0.0)));
+  const V root = vsqrt(sel(disc > 0.0, disc, splat<V>(0.0)));
   const M a_ok = a >= 1e-300;
-  const V t = (-b - root) / sel(a_ok, a, splat(1.0));
+  const V t = (-b - root) / sel(a_ok, a, splat<V>(1.0));
   return (c > 0.0) & a_ok & (b < 0.0) & (disc >= 0.0) & (t <= 1.0);
 }
 
-HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
+/// Lanes l0 .. l0 + N - 1 of the block.
+template <int N>
+HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
+  typedef typename VecTypes<N>::V V;
+  typedef typename VecTypes<N>::M M;
   const double dt = job.dt, rho = job.rho, k = job.k, gamma = job.gamma, drag = job.drag;
   const double max_step = job.max_angle_step, cos_max_bend = job.cos_max_bend;
   const double gx = job.g[0], gy = job.g[1], gz = job.g[2];
@@ -92,21 +118,22 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
   const double rx0 = job.air0[0], ry0 = job.air0[1], rz0 = job.air0[2];
 
   V px, py, pz;  // pivot: the parent's new position
-  V q0 = splat(1.0), q1 = splat(0.0), q2 = splat(0.0), q3 = splat(0.0), q4 = splat(1.0), q5 = splat(0.0),
-    q6 = splat(0.0), q7 = splat(0.0), q8 = splat(1.0);  // rotation of the parent from its styled frame
+  V q0 = splat<V>(1.0), q1 = splat<V>(0.0), q2 = splat<V>(0.0), q3 = splat<V>(0.0), q4 = splat<V>(1.0),
+    q5 = splat<V>(0.0), q6 = splat<V>(0.0), q7 = splat<V>(0.0),
+    q8 = splat<V>(1.0);  // rotation of the parent from its styled frame
   M flag = M{} & 0;
-  for (int l = 0; l < W; ++l) {
-    const int i0 = job.point[l];
+  for (int l = 0; l < N; ++l) {
+    const int i0 = job.point[l0 + l];
     const Vec3 p = i0 >= 0 ? job.positions[i0] : Vec3::Zero();
     px[l] = p.x(), py[l] = p.y(), pz[l] = p.z();
   }
 
   for (int r = 1; r < job.rows; ++r) {
-    const int* pt = job.point + r * W;
+    const int* pt = job.point + r * W + l0;
     V nx, ny, nz, vx, vy, vz, wx, wy, wz, fx, fy, fz, ux, uy, uz, sx, sy, sz, mx, my, mz, ex, ey, ez, d, ii;
     M active;
     bool any_active = false;
-    for (int l = 0; l < W; ++l) {
+    for (int l = 0; l < N; ++l) {
       const int i = pt[l];
       active[l] = i >= 0 ? -1 : 0;
       if (i >= 0) {
@@ -145,9 +172,9 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
     // Segment midpoints; the turbulence is evaluated there (world points), lane by lane.
     const V hd = 0.5 * d;
     const V cx = px + hd * nx, cy = py + hd * ny, cz = pz + hd * nz;
-    V tx = splat(0.0), ty = splat(0.0), tz = splat(0.0);
+    V tx = splat<V>(0.0), ty = splat<V>(0.0), tz = splat<V>(0.0);
     if (job.turbulence)
-      for (int l = 0; l < W; ++l) {
+      for (int l = 0; l < N; ++l) {
         if (pt[l] < 0) continue;
         const Vec3 t =
             *job.head_rotation_inverse * job.turbulence->at(*job.head_pose * Vec3(cx[l], cy[l], cz[l]));
@@ -181,8 +208,8 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
     const V s2 = axx * axx + axy * axy + axz * axz;
     const V c2 = c * c;
     const M series = (c > 0.0) & (s2 > 1e-24) & (s2 < 0.01 * c2);
-    const V x2 = s2 / sel(c2 > 0.0, c2, splat(1.0));
-    V p = splat(1.0 / 17.0);
+    const V x2 = s2 / sel(c2 > 0.0, c2, splat<V>(1.0));
+    V p = splat<V>(1.0 / 17.0);
     p = p * x2 - 1.0 / 15.0;
     p = p * x2 + 1.0 / 13.0;
     p = p * x2 - 1.0 / 11.0;
@@ -195,11 +222,11 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
     // opposite directions (s <= 1e-12, c <= 0) by the scalar function.
     const V sn = vsqrt(s2);
     const M has_axis = sn > 1e-12;
-    const V scale = sel(series, p / sel(c != 0.0, c, splat(1.0)),
-                        sel(has_axis, vatan2(sn, c) / sel(has_axis, sn, splat(1.0)), splat(0.0)));
+    const V scale = sel(series, p / sel(c != 0.0, c, splat<V>(1.0)),
+                        sel(has_axis, vatan2(sn, c) / sel(has_axis, sn, splat<V>(1.0)), splat<V>(0.0)));
     const M opposite = ~series & ~has_axis & ~(c > 0.0);
     V hx = axx * scale, hy = axy * scale, hz = axz * scale;
-    for (int l = 0; l < W; ++l)
+    for (int l = 0; l < N; ++l)
       if (opposite[l]) {
         const Vec3 h = rotationVectorBetween(Vec3(restx[l], resty[l], restz[l]), Vec3(nx[l], ny[l], nz[l]));
         hx[l] = h.x(), hy[l] = h.y(), hz[l] = h.z();
@@ -216,7 +243,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
     Wx = Wx - wn * nx, Wy = Wy - wn * ny, Wz = Wz - wn * nz;
     const V step_angle = vsqrt(Wx * Wx + Wy * Wy + Wz * Wz);
     const M over = step_angle > max_step;
-    const V limit = max_step / sel(over, step_angle, splat(1.0));
+    const V limit = max_step / sel(over, step_angle, splat<V>(1.0));
     Wx = sel(over, Wx * limit, Wx), Wy = sel(over, Wy * limit, Wy), Wz = sel(over, Wz * limit, Wz);
     const V a2 = Wx * Wx + Wy * Wy + Wz * Wz;
     const M small = a2 < 0.01;
@@ -239,7 +266,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
     bx = sel(tiny, nx + crx, bx), by = sel(tiny, ny + cry, by), bz = sel(tiny, nz + crz, bz);
     const V len = vsqrt(bx * bx + by * by + bz * bz);
     V kx = bx / len, ky = by / len, kz = bz / len;
-    for (int l = 0; l < W; ++l)
+    for (int l = 0; l < N; ++l)
       if (!small[l]) {
         const Vec3 next = rotateByVector(Vec3(Wx[l], Wy[l], Wz[l]), Vec3(nx[l], ny[l], nz[l])).normalized();
         kx[l] = next.x(), ky[l] = next.y(), kz[l] = next.z();
@@ -258,7 +285,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
       const V cq = ax * kx + ay * ky + az * kz;
       bad = bad | (cq < -1.0 + 1e-9);
       const V vx1 = ay * kz - az * ky, vy1 = az * kx - ax * kz, vz1 = ax * ky - ay * kx;
-      const V den = sel(1.0 + cq > 1e-300, 1.0 + cq, splat(1.0));
+      const V den = sel(1.0 + cq > 1e-300, 1.0 + cq, splat<V>(1.0));
       const V hx1 = vx1 / den, hy1 = vy1 / den, hz1 = vz1 / den;
       const V r00 = vx1 * hx1 + cq, r01 = vx1 * hy1 - vz1, r02 = vx1 * hz1 + vy1;
       const V r10 = vy1 * hx1 + vz1, r11 = vy1 * hy1 + cq, r12 = vy1 * hz1 - vx1;
@@ -276,7 +303,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
     // Bodies: the quick reject of Simulator::prepareBodies, then for the bodies within reach its exact
     // tests: the end inside now (reaction constraint), or the new segment / the end's path over the
     // substep not clear of the body (Simulator::clearOf): the exact step decides.
-    V reach_prev = splat(0.0);
+    V reach_prev = splat<V>(0.0);
     if (job.have_before) {
       const V gx1 = ex - px, gy1 = ey - py, gz1 = ez - pz;
       reach_prev = vsqrt(gx1 * gx1 + gy1 * gy1 + gz1 * gz1);
@@ -294,7 +321,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
       }
       const M reach = ~far & active;
       bool near_any = false;
-      for (int l = 0; l < W; ++l) near_any |= reach[l] != 0;
+      for (int l = 0; l < N; ++l) near_any |= reach[l] != 0;
       if (!near_any) continue;
       const double* S = B.sinv;
       const double* Sb = B.sinv_before;
@@ -305,7 +332,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
       const M pivot_inside = n2 < 1.0;
       const V lim = 1.0 + d / B.min_radius + 1e-9;
       M far2 = n2 > lim * lim;
-      V bx1 = splat(0.0), by1 = splat(0.0), bz1 = splat(0.0);
+      V bx1 = splat<V>(0.0), by1 = splat<V>(0.0), bz1 = splat<V>(0.0);
       if (job.have_before) {
         const V ddx = ex - B.centre_before[0], ddy = ey - B.centre_before[1], ddz = ez - B.centre_before[2];
         bx1 = Sb[0] * ddx + Sb[1] * ddy + Sb[2] * ddz;
@@ -335,7 +362,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
     // The state at the end of the substep; the new ends are the next row's pivots.
     const V midx = px + hd * kx, midy = py + hd * ky, midz = pz + hd * kz;
     const V velx = (midx - mx) / dt, vely = (midy - my) / dt, velz = (midz - mz) / dt;
-    for (int l = 0; l < W; ++l) {
+    for (int l = 0; l < N; ++l) {
       const int i = pt[l];
       if (i < 0) continue;
       job.out_direction[i] = Vec3(kx[l], ky[l], kz[l]);
@@ -346,13 +373,18 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job) {
     }
     px = nex, py = ney, pz = nez;
   }
-  for (int l = 0; l < W; ++l) job.flag[l] = flag[l] != 0;
+  for (int l = 0; l < N; ++l) job.flag[l0 + l] = flag[l] != 0;
 }
 
-void stepBlockBaseline(BlockJob& job) { blockBody(job); }
+void stepBlockBaseline(BlockJob& job) {
+  for (int l0 = 0; l0 < W; l0 += 2) blockBody<2>(job, l0);
+}
 
 #if defined(HAIR_SIM_LANES_AVX2)
-__attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) { blockBody(job); }
+__attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) {
+  static_assert(W % 4 == 0, "blocks of whole AVX2 vectors");
+  for (int l0 = 0; l0 < W; l0 += 4) blockBody<4>(job, l0);
+}
 #endif
 
 }  // namespace
