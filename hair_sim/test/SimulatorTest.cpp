@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "TestUtil.hpp"
+#include "hair_sim/core/events/EventSchedule.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
 
@@ -380,6 +381,69 @@ TEST(SimulatorTest, FreeStripsNeverNeedTheExactStep) {
   double worst = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
   EXPECT_LT(worst, 1e-9);
+}
+
+TEST(SimulatorTest, LanePathTakesTurbulenceAndMixedMargins) {
+  // Turbulence is evaluated lane by lane at the segment midpoints (world points), and a block of chains
+  // whose strips differ in thickness margin (so see differently inflated bodies) goes to the exact step
+  // whole. The default hairstyle with every other strip's margin doubled, the bodies, a turbulence event:
+  // the lanes follow the exact step within rounding (1e-8 m over 40 substeps, as above), the mixed blocks
+  // reach the exact step, and nothing ends inside a body.
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  Hairstyle style = loadHairstyle(config.hairstyle_file);
+  // Blocks of 4 chains are 2 strips of 2 columns: strips 1, 5, 9, ... doubled make blocks 0, 2, 4, ... mixed.
+  std::size_t mixed_strips = 0;
+  for (std::size_t i = 1; i < style.strips.size(); i += 4) {
+    style.strips[i].thickness_margin *= 2.0;
+    mixed_strips += 2;
+  }
+  EventSchedule events;
+  Event turbulence;
+  turbulence.type = EventType::Turbulence;
+  turbulence.intensity = 2.0;
+  turbulence.seed = 3;
+  events.add(turbulence);
+  auto run = [&](Simulator::StepPath path, long* exact) {
+    Simulator sim(style, config.physics, config.bodies);
+    sim.setStepPath(path);
+    Iso3 rest = Iso3::Identity();
+    rest.translation() = Vec3(0.0, 0.0, 1.6);
+    HeadMotionEstimator head;
+    head.reset(rest);
+    *exact = 0;
+    double penetration = 0.0;
+    for (int i = 1; i <= 40; ++i) {
+      const EventSample sample = events.sample(i * sim.parameters().substep, sim.parameters().gravity);
+      StepInputs in;
+      in.head = head.update(rest, sim.parameters().substep);
+      in.wind = sample.wind + Vec3(1.0, 0.0, 0.0);
+      in.turbulence = &sample.turbulence;
+      for (const Body& b : config.bodies)
+        in.body_frames.push_back(b.frame == config.head_frame ? rest : Iso3::Identity());
+      sim.step(in);
+      *exact += sim.exactStripCount();
+      penetration = std::max(penetration, sim.maxPenetration());
+    }
+    EXPECT_EQ(penetration, 0.0);
+    return sim.positionsHead();
+  };
+  long exact_lanes = 0, exact_exact = 0;
+  const std::vector<Vec3> a = run(Simulator::StepPath::Lanes, &exact_lanes);
+  const std::vector<Vec3> b = run(Simulator::StepPath::Exact, &exact_exact);
+  double worst = 0.0, moved = 0.0;
+  std::size_t k = 0;
+  for (const Strip& s : style.strips)
+    for (const Vec3& p : s.points) {
+      worst = std::max(worst, (a[k] - b[k]).norm());
+      moved = std::max(moved, (a[k] - p).norm());
+      ++k;
+    }
+  EXPECT_LT(worst, 1e-8);
+  EXPECT_GT(moved, 1e-3);  // the turbulence moved the hair
+  EXPECT_EQ(exact_exact, 40 * static_cast<long>(style.strips.size()));
+  EXPECT_GE(exact_lanes, 40 * static_cast<long>(mixed_strips));  // the mixed blocks, every substep
+  EXPECT_LT(exact_lanes,
+            exact_exact - 40 * static_cast<long>(style.strips.size()) / 4);  // lanes for the rest
 }
 
 TEST(SimulatorTest, RejectsBadParametersAndShapes) {
