@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "RotationSeries.hpp"
 #include "StepLanes.hpp"
 
 namespace hair_sim {
@@ -34,15 +35,7 @@ Vec3 rotationVectorBetween(const Vec3& a, const Vec3& b) {
   // square root and no atan2.
   if (c > 0.0 && s2 > 1e-24 && s2 < 0.01 * (c * c)) {
     const double x2 = s2 / (c * c);
-    double p = 1.0 / 17.0;
-    p = p * x2 - 1.0 / 15.0;
-    p = p * x2 + 1.0 / 13.0;
-    p = p * x2 - 1.0 / 11.0;
-    p = p * x2 + 1.0 / 9.0;
-    p = p * x2 - 1.0 / 7.0;
-    p = p * x2 + 1.0 / 5.0;
-    p = p * x2 - 1.0 / 3.0;
-    p = p * x2 + 1.0;
+    const double p = series::atanOverX(x2);
     return axis * (p / c);
   }
   const double s = std::sqrt(s2);
@@ -59,17 +52,8 @@ Vec3 rotateByVector(const Vec3& w, const Vec3& v) {
     // Small angles (a substep's turn): v cos + (w x v) sin(a) / a + w (w.v) (1 - cos) / a^2 with the three
     // series in a^2 < 0.01 to a^10 (the terms left out are below 2e-21): no square root, no sin or cos,
     // and no cancellation in 1 - cos.
-    const double c =
-        1.0 + a2 * (-1.0 / 2.0 +
-                    a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0 + a2 * (-1.0 / 3628800.0)))));
-    const double sa =
-        1.0 +
-        a2 * (-1.0 / 6.0 +
-              a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0 + a2 * (1.0 / 362880.0 + a2 * (-1.0 / 39916800.0)))));
-    const double ca =
-        0.5 +
-        a2 * (-1.0 / 24.0 + a2 * (1.0 / 720.0 + a2 * (-1.0 / 40320.0 +
-                                                      a2 * (1.0 / 3628800.0 + a2 * (-1.0 / 479001600.0)))));
+    double c, sa, ca;
+    series::rotation(a2, c, sa, ca);
     return v * c + w.cross(v) * sa + w * (w.dot(v) * ca);
   }
   const double angle = std::sqrt(a2);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "RotationSeries.hpp"
 #include "hair_sim/core/Simulator.hpp"
 #include "hair_sim/core/events/EventSchedule.hpp"
 
@@ -209,15 +210,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     const V c2 = c * c;
     const M series = (c > 0.0) & (s2 > 1e-24) & (s2 < 0.01 * c2);
     const V x2 = s2 / sel(c2 > 0.0, c2, splat<V>(1.0));
-    V p = splat<V>(1.0 / 17.0);
-    p = p * x2 - 1.0 / 15.0;
-    p = p * x2 + 1.0 / 13.0;
-    p = p * x2 - 1.0 / 11.0;
-    p = p * x2 + 1.0 / 9.0;
-    p = p * x2 - 1.0 / 7.0;
-    p = p * x2 + 1.0 / 5.0;
-    p = p * x2 - 1.0 / 3.0;
-    p = p * x2 + 1.0;
+    const V p = series::atanOverX(x2);
     // Outside the series: angle = atan2(s, c) by vatan2 (s > 1e-12); a zero rotation for s <= 1e-12, c > 0;
     // opposite directions (s <= 1e-12, c <= 0) by the scalar function.
     const V sn = vsqrt(s2);
@@ -249,16 +242,8 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     const M small = a2 < 0.01;
     const M tiny = a2 < 1e-24;
     const V crx = Wy * nz - Wz * ny, cry = Wz * nx - Wx * nz, crz = Wx * ny - Wy * nx;
-    const V co =
-        1.0 + a2 * (-1.0 / 2.0 +
-                    a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0 + a2 * (-1.0 / 3628800.0)))));
-    const V sa =
-        1.0 +
-        a2 * (-1.0 / 6.0 +
-              a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0 + a2 * (1.0 / 362880.0 + a2 * (-1.0 / 39916800.0)))));
-    const V ca = 0.5 + a2 * (-1.0 / 24.0 +
-                             a2 * (1.0 / 720.0 + a2 * (-1.0 / 40320.0 +
-                                                       a2 * (1.0 / 3628800.0 + a2 * (-1.0 / 479001600.0)))));
+    V co, sa, ca;
+    series::rotation(a2, co, sa, ca);
     const V wv = (Wx * nx + Wy * ny + Wz * nz) * ca;
     V bx = (nx * co + crx * sa) + Wx * wv;
     V by = (ny * co + cry * sa) + Wy * wv;
