@@ -109,9 +109,12 @@ Ellipsoid Ellipsoid::transformed(const Iso3& pose) const {
   // Poses come from tf: a quaternion whose norm is off 1 by a few 1e-7 (float rounding, within what the
   // node and tf2 accept) gives a matrix just outside kRotationTolerance. Such a pose is taken as its
   // nearest rotation; one further off is still an error (found by fuzz_messages).
+  // A rotation orthonormal to rounding (every pose from a unit quaternion) is taken as it is: no SVD, which
+  // was most of the cost of the bodies' poses in every substep.
   const Mat3& r = pose.linear();
-  if (r.allFinite() && (r.transpose() * r - Mat3::Identity()).cwiseAbs().maxCoeff() <= kPoseTolerance &&
-      r.determinant() > 0.0) {
+  const double deviation = (r.transpose() * r - Mat3::Identity()).cwiseAbs().maxCoeff();
+  if (r.allFinite() && deviation <= kPoseTolerance && r.determinant() > 0.0) {
+    if (deviation <= kReorthonormaliseAbove) return Ellipsoid(pose * center_, r * rotation_, radii_);
     const Eigen::JacobiSVD<Mat3> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
     const Mat3 nearest = svd.matrixU() * svd.matrixV().transpose();  // polar factor
     return Ellipsoid(pose * center_, nearest * rotation_, radii_);
