@@ -177,7 +177,7 @@ void Simulator::buildLanes() {
   new_rate_.assign(n, Vec3::Zero());
   new_velocity_.assign(n, Vec3::Zero());
   new_mid_.assign(n, Vec3::Zero());
-  strip_exact_.assign(hairstyle_.strips.size(), 0);
+  strip_exact_from_.assign(hairstyle_.strips.size(), kNoExact);
 }
 
 void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally) {
@@ -203,7 +203,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       lb.motion = bound.motion;
       lb.shift = bound.shift;
     }
-  std::fill(strip_exact_.begin(), strip_exact_.end(), 0);
+  std::fill(strip_exact_from_.begin(), strip_exact_from_.end(), kNoExact);
 
   lanes::BlockJob job;
   job.dt = f.dt, job.rho = f.rho, job.k = f.k, job.gamma = f.gamma, job.drag = f.drag;
@@ -239,15 +239,22 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     const int* strips = &lane_strip_[blk * W];
     if (block_margin_[blk] < 0) {
       for (int l = 0; l < W; ++l)
-        if (strips[l] >= 0) strip_exact_[static_cast<std::size_t>(strips[l])] = 1;
+        if (strips[l] >= 0) strip_exact_from_[static_cast<std::size_t>(strips[l])] = 0;
       continue;
     }
     job.rows = block_rows_[blk];
     job.point = &lane_point_[blk * stride];
     job.bodies = nb > 0 ? &lane_bodies_[static_cast<std::size_t>(block_margin_[blk]) * nb] : nullptr;
     lanes::stepBlock(job, baseline);
-    for (int l = 0; l < W; ++l)
-      if (job.flag[l] && strips[l] >= 0) strip_exact_[static_cast<std::size_t>(strips[l])] = 1;
+    // The exact step takes over at the first flagged place of the strip in its sweep order (column by
+    // column, root to tip): the places before it are the lanes'.
+    for (int l = 0; l < W; ++l) {
+      if (!job.first_flagged_row[l] || strips[l] < 0) continue;
+      const std::size_t si = static_cast<std::size_t>(strips[l]);
+      const int column = job.point[l] - strip_offset_[si];
+      const int key = column * hairstyle_.strips[si].rows + job.first_flagged_row[l];
+      strip_exact_from_[si] = std::min(strip_exact_from_[si], key);
+    }
   }
 
   // In strip order, as the exact step goes: a strip is committed from the lanes when the spring band holds
@@ -261,17 +268,24 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     const Strip& s = hairstyle_.strips[si];
     const int first = strip_offset_[si] + s.columns;
     const int end = strip_offset_[si] + s.pointCount();
-    bool exact = strip_exact_[si] != 0;
-    for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1] && !exact; ++q) {
+    int from = strip_exact_from_[si];
+    const int base = strip_offset_[si];
+    auto sweepKey = [&](int point) {  // place of a point of strip si in the sweep
+      const int local = point - base;
+      return (local % s.columns) * s.rows + local / s.columns;
+    };
+    for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {
       const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
       const Vec3& a = new_position_[static_cast<std::size_t>(bp.later)];
       const Vec3& b = bp.same_strip ? new_position_[static_cast<std::size_t>(bp.earlier)]
                                     : positions_[static_cast<std::size_t>(bp.earlier)];
       const double dist2 = (a - b).squaredNorm();
-      exact = dist2 < bp.near2 || dist2 > bp.far2;
+      if (dist2 < bp.near2 || dist2 > bp.far2)  // kept by the later point of the pair in the sweep
+        from = std::min(
+            from, bp.same_strip ? std::max(sweepKey(bp.later), sweepKey(bp.earlier)) : sweepKey(bp.later));
     }
-    if (exact) {
-      stepStrip(in, f, si, strip_offset_[si], tally);
+    if (from != kNoExact) {
+      stepStrip(in, f, si, strip_offset_[si], tally, from);
       ++exact_strips_;
       continue;
     }
@@ -1166,7 +1180,7 @@ void Simulator::step(const StepInputs& in) {
 }
 
 void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset,
-                          StepTally& tally) {
+                          StepTally& tally, int from) {
   const double dt = f.dt, rho = f.rho, k = f.k, gamma = f.gamma, drag = f.drag;
   const double cos_max_bend = f.cos_max_bend, k_c = f.k_c, c_c = f.c_c;
   const Mat3& Rt = f.Rt;
@@ -1196,6 +1210,24 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
     std::size_t parent = static_cast<std::size_t>(offset + s.index(0, c));
     for (int r = 1; r < s.rows; ++r) {
       const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
+      if (c * s.rows + r < from) {
+        // Before the place the exact step takes over: the lanes' result, on which it would decide the same
+        // (nothing acted there). The start state is kept for relaxStrip.
+        const std::size_t local = i - static_cast<std::size_t>(offset);
+        start_pos_[local] = positions_[i];
+        start_dir_[local] = direction_[i];
+        start_mid_[local] = previous_mid_[i];
+        positions_[i] = new_position_[i];
+        direction_[i] = new_direction_[i];
+        rate_[i] = new_rate_[i];
+        velocity_[i] = new_velocity_[i];
+        previous_mid_[i] = new_mid_[i];
+        moved_in_step_[i] = steps_;
+        tally.max_rate2 = std::max(tally.max_rate2, rate_[i].squaredNorm());
+        if (r + 1 < s.rows) Q = minimalRotation(Q * styled_dir_[i], direction_[i]) * Q;
+        parent = i;
+        continue;
+      }
       const double d = length_[i];
       const double inv_i = inv_inertia_[i];
       const Vec3& pivot = positions_[parent];

@@ -123,6 +123,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     q5 = splat<V>(0.0), q6 = splat<V>(0.0), q7 = splat<V>(0.0),
     q8 = splat<V>(1.0);  // rotation of the parent from its styled frame
   M flag = M{} & 0;
+  int first_row[N] = {};  // the first row flagged, per lane
   for (int l = 0; l < N; ++l) {
     const int i0 = job.point[l0 + l];
     const Vec3 p = i0 >= 0 ? job.positions[i0] : Vec3::Zero();
@@ -357,8 +358,10 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       job.out_mid[i] = Vec3(midx[l], midy[l], midz[l]);
     }
     px = nex, py = ney, pz = nez;
+    for (int l = 0; l < N; ++l)
+      if (flag[l] && first_row[l] == 0) first_row[l] = r;
   }
-  for (int l = 0; l < N; ++l) job.flag[l0 + l] = flag[l] != 0;
+  for (int l = 0; l < N; ++l) job.first_flagged_row[l0 + l] = first_row[l];
 }
 
 void stepBlockBaseline(BlockJob& job) {

@@ -54,8 +54,8 @@ struct BlockJob {
   const WindField* turbulence = nullptr;
   const Iso3* head_pose = nullptr;
   const Mat3* head_rotation_inverse = nullptr;
-  /// Out: per lane, nonzero when the exact step must take the lane's strip.
-  unsigned char flag[kLanes] = {};
+  /// Out: per lane, the first row from which the exact step must take over (0: none).
+  int first_flagged_row[kLanes] = {};
 };
 
 /// Advances one block (AVX2 when the CPU has it unless baseline_only).

@@ -175,8 +175,10 @@ class Simulator {
     int penetrations = 0;
   };
   /// The exact step of one strip (offset: its first point): the sweep over its columns, resolveCollisions
-  /// for every segment, relaxStrip when its band does not hold.
-  void stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset, StepTally& tally);
+  /// for every segment, relaxStrip when its band does not hold. The places of the sweep before `from`
+  /// (column * rows + row) take the lanes' results (new_*_), the others the exact step.
+  void stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset, StepTally& tally,
+                 int from = 0);
   /// The Lanes path: every block through lanes::stepBlock, the band of every spring pair checked at the new
   /// places, the strips that passed committed, the others through stepStrip in strip order.
   void stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally);
@@ -306,7 +308,9 @@ class Simulator {
   std::vector<int> block_rows_, block_margin_, lane_point_, lane_strip_;
   int lane_stride_rows_ = 0;  ///< rows per block in lane_point_
   std::vector<Vec3> new_position_, new_direction_, new_rate_, new_velocity_, new_mid_;
-  std::vector<char> strip_exact_;
+  /// Per strip, the first place of its sweep (column * rows + row) that takes the exact step, or kNoExact.
+  std::vector<int> strip_exact_from_;
+  static constexpr int kNoExact = 1 << 30;
   std::vector<lanes::LaneBody> lane_bodies_;  ///< [margin][body], this substep
 };
 
