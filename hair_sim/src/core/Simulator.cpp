@@ -622,8 +622,10 @@ bool pathEntersUnitSphere(const Vec3& q0, const Vec3& q1) {
   if (b >= 0.0) return false;  // moving away
   const double disc = b * b - a * c;
   if (disc < 0.0) return false;
-  const double t = (-b - std::sqrt(disc)) / a;
-  return t <= 1.0;
+  // The entry t = (-b - sqrt(disc)) / a <= 1, i.e. -b - a <= sqrt(disc): without a division or a square
+  // root (the lanes test the same way, so both paths decide alike).
+  const double lhs = -b - a;
+  return lhs <= 0.0 || lhs * lhs <= disc;
 }
 
 }  // namespace

@@ -99,10 +99,10 @@ HAIR_SIM_ALWAYS_INLINE auto pathEnters(V q0x, V q0y, V q0z, V q1x, V q1y, V q1z)
   const V a = dx * dx + dy * dy + dz * dz;
   const V b = q0x * dx + q0y * dy + q0z * dz;
   const V disc = b * b - a * c;
-  const V root = vsqrt(sel(disc > 0.0, disc, splat<V>(0.0)));
+  // t = (-b - sqrt(disc)) / a <= 1 as -b - a <= sqrt(disc), like the Simulator's pathEntersUnitSphere.
+  const V lhs = -b - a;
   const M a_ok = a >= 1e-300;
-  const V t = (-b - root) / sel(a_ok, a, splat<V>(1.0));
-  return (c > 0.0) & a_ok & (b < 0.0) & (disc >= 0.0) & (t <= 1.0);
+  return (c > 0.0) & a_ok & (b < 0.0) & (disc >= 0.0) & ((lhs <= 0.0) | (lhs * lhs <= disc));
 }
 
 /// Lanes l0 .. l0 + N - 1 of the block.
