@@ -289,17 +289,20 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       ++exact_strips_;
       continue;
     }
-    for (std::size_t i = static_cast<std::size_t>(first); i < static_cast<std::size_t>(end); ++i) {
-      positions_[i] = new_position_[i];
-      direction_[i] = new_direction_[i];
-      rate_[i] = new_rate_[i];
-      velocity_[i] = new_velocity_[i];
-      previous_mid_[i] = new_mid_[i];
-      moved_in_step_[i] = steps_;
-      max_rate2 = std::max(max_rate2, rate_[i].squaredNorm());
-    }
+    for (std::size_t i = static_cast<std::size_t>(first); i < static_cast<std::size_t>(end); ++i)
+      max_rate2 = std::max(max_rate2, commitLanes(i));
   }
   tally.max_rate2 = std::max(tally.max_rate2, max_rate2);
+}
+
+double Simulator::commitLanes(std::size_t i) {
+  positions_[i] = new_position_[i];
+  direction_[i] = new_direction_[i];
+  rate_[i] = new_rate_[i];
+  velocity_[i] = new_velocity_[i];
+  previous_mid_[i] = new_mid_[i];
+  moved_in_step_[i] = steps_;
+  return rate_[i].squaredNorm();
 }
 
 void Simulator::updateSegmentConstants() {
@@ -1219,13 +1222,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
         start_pos_[local] = positions_[i];
         start_dir_[local] = direction_[i];
         start_mid_[local] = previous_mid_[i];
-        positions_[i] = new_position_[i];
-        direction_[i] = new_direction_[i];
-        rate_[i] = new_rate_[i];
-        velocity_[i] = new_velocity_[i];
-        previous_mid_[i] = new_mid_[i];
-        moved_in_step_[i] = steps_;
-        tally.max_rate2 = std::max(tally.max_rate2, rate_[i].squaredNorm());
+        tally.max_rate2 = std::max(tally.max_rate2, commitLanes(i));
         if (r + 1 < s.rows) Q = minimalRotation(Q * styled_dir_[i], direction_[i]) * Q;
         parent = i;
         continue;

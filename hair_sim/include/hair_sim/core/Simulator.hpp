@@ -182,6 +182,8 @@ class Simulator {
   /// The Lanes path: every block through lanes::stepBlock, the band of every spring pair checked at the new
   /// places, the strips that passed committed, the others through stepStrip in strip order.
   void stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally);
+  /// Point i takes the lanes' result (new_*_) as its state at the end of the substep; returns |w|^2.
+  double commitLanes(std::size_t i);
   /// Inertia floors (1 / I) and compensated rest directions from the lengths, styled directions and params_.
   void updateSegmentConstants();
   void buildSprings();
