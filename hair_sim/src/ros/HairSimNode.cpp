@@ -229,10 +229,14 @@ void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
     }
     world = pose.linear() * v;
   }
-  const double now = started_ ? sim_time_.toSec() : 0.0;
-  wind_from_ = windAt(now);
+  // The ramp starts at header.stamp (so that a replay starts it at the same instant of the hair's time),
+  // or on arrival when the stamp is zero or further than max_tf_age from the clock.
+  double start = started_ ? sim_time_.toSec() : 0.0;
+  if (!msg->header.stamp.isZero() && std::abs((msg->header.stamp - ros::Time::now()).toSec()) <= max_tf_age_)
+    start = msg->header.stamp.toSec();
+  wind_from_ = windAt(start);
   wind_to_ = world;
-  wind_start_ = now;
+  wind_start_ = start;
   wind_ramp_ = msg->ramp_time;
   turbulence_ = msg->turbulence;
 }
@@ -502,7 +506,7 @@ void HairSimNode::update(bool from_tf) {
       ROS_WARN("hair_sim: %zu scheduled events dropped with the time jump", events_.size());
       events_.clear();
     }
-    sim_time_ = target;
+    snapSimTime(target);
     next_publish_ = ros::Time();
     started_ = true;
     ROS_INFO("hair_sim: following %s in %s from t = %.3f", config_.head_frame.c_str(),
@@ -531,20 +535,21 @@ void HairSimNode::update(bool from_tf) {
     const Iso3 held = head_.state().pose;
     int held_steps = 0;
     const ros::WallTime held_start = ros::WallTime::now();
-    while (sim_time_ + ros::Duration(dt) <= hold_until && held_steps < max_substeps_per_update_) {
-      const ros::Time t = sim_time_ + ros::Duration(dt);
+    while (gridTime(sim_step_ + 1, dt) <= hold_until && held_steps < max_substeps_per_update_) {
+      const ros::Time t = gridTime(sim_step_ + 1, dt);
       stepTo(t, head_.update(held, dt), last_body_frames_);  // bodies on the head are held with it
+      ++sim_step_;
       sim_time_ = t;
       ++held_steps;
     }
-    if (sim_time_ + ros::Duration(dt) <= hold_until) {  // a long stall: skip ahead
+    if (gridTime(sim_step_ + 1, dt) <= hold_until) {  // a long stall: skip ahead
       ROS_WARN_THROTTLE(5.0,
                         "hair_sim: %.3f s behind the clock with the head held; skipping ahead "
                         "(max_substeps_per_update %d)",
                         (hold_until - sim_time_).toSec(), max_substeps_per_update_);
       diagnostics_->droppedInput("stale head: skipped " + formatDouble((hold_until - sim_time_).toSec()) +
                                  " s (max_substeps_per_update)");
-      sim_time_ = hold_until;
+      snapSimTime(hold_until);
     }
     status_steps_ += held_steps;
     diagnostics_->addSubsteps(held_steps, (ros::WallTime::now() - held_start).toSec());
@@ -555,7 +560,7 @@ void HairSimNode::update(bool from_tf) {
   const ros::WallTime wall_start = ros::WallTime::now();
   int steps = 0;
   std::vector<Iso3> frames(config_.bodies.size(), Iso3::Identity());
-  while ((sim_time_ + ros::Duration(dt)) <= target) {
+  while (gridTime(sim_step_ + 1, dt) <= target) {
     if (steps == max_substeps_per_update_) {
       ROS_WARN_THROTTLE(5.0,
                         "hair_sim: %.3f s behind the head pose; skipping ahead (max_substeps_per_update %d)",
@@ -563,12 +568,12 @@ void HairSimNode::update(bool from_tf) {
       diagnostics_->droppedInput("head poses: skipped " + formatDouble((target - sim_time_).toSec()) +
                                  " s (max_substeps_per_update)");
       Iso3 pose;
-      if (lookupPose(config_.head_frame, target, pose)) head_.reset(pose);
-      sim_time_ = target;
+      snapSimTime(target);
+      if (lookupPose(config_.head_frame, sim_time_, pose)) head_.reset(pose);
       break;
     }
     applyLiveSettings();
-    const ros::Time t = sim_time_ + ros::Duration(dt);
+    const ros::Time t = gridTime(sim_step_ + 1, dt);
     Iso3 pose;
     if (!lookupPose(config_.head_frame, t, pose)) break;
     bool frames_ok = true;
@@ -587,6 +592,7 @@ void HairSimNode::update(bool from_tf) {
     }
     stepTo(t, head, frames);
     diagnostics_->penetrations(simulator_->penetrationCount(), simulator_->maxPenetration());
+    ++sim_step_;
     sim_time_ = t;
     last_body_frames_ = frames;
     ++steps;
@@ -595,18 +601,13 @@ void HairSimNode::update(bool from_tf) {
   status_steps_ += steps;
   status_step_seconds_ += (ros::WallTime::now() - wall_start).toSec();
   diagnostics_->addSubsteps(steps, (ros::WallTime::now() - wall_start).toSec());
-  // An output is due every 1/publish_rate s of ROS time, on the first head pose after that (so the
-  // markers go out right after the tf they reflect); the timer publishes whenever it acts.
-  const ros::Time now = ros::Time::now();
-  const ros::Duration period(1.0 / config_.publish_rate);
-  if (from_tf) {
-    if (!next_publish_.isZero() && now < next_publish_) return;
-    next_publish_ =
-        next_publish_.isZero() || now - next_publish_ > period ? now + period : next_publish_ + period;
-    last_tf_publish_ = ros::WallTime::now();
-  } else {
-    next_publish_ = now + period;
-  }
+  // An output is due at every multiple of 1/publish_rate s of ROS time, on the first head pose stamped at or
+  // after it (so the markers go out right after the tf they reflect, and a replay of the same tf publishes
+  // the same states); the timer publishes whenever it acts.
+  const double period = 1.0 / config_.publish_rate;
+  if (from_tf && !next_publish_.isZero() && target < next_publish_) return;
+  if (from_tf) last_tf_publish_ = ros::WallTime::now();
+  next_publish_ = gridTime(gridIndexAtOrBefore(target, period) + 1, period);
   if (last_body_frames_.size() != config_.bodies.size()) {
     for (std::size_t b = 0; b < config_.bodies.size(); ++b)
       if (!lookupPose(config_.bodies[b].frame, sim_time_, frames[b])) return;
@@ -619,7 +620,7 @@ void HairSimNode::update(bool from_tf) {
   ros::Time stamp = sim_time_;
   Iso3 pose = head_.state().pose;
   std::vector<Iso3>* body_frames = &last_body_frames_;
-  if (target > sim_time_ && sim_time_ + ros::Duration(dt) > target) {
+  if (target > sim_time_ && gridTime(sim_step_ + 1, dt) > target) {
     bool frames_ok = true;
     for (std::size_t b = 0; b < config_.bodies.size() && frames_ok; ++b)
       frames_ok = lookupPose(config_.bodies[b].frame, target, frames[b]);
@@ -688,6 +689,31 @@ void HairSimNode::publishBodies(const ros::Time& stamp, const std::vector<Iso3>&
   published_body_frames_ = frames;
   bodies_pub_.publish(
       makeBodyMarkers(config_.bodies, frames, config_.head_frame, config_.world_frame, stamp));
+}
+
+ros::Time HairSimNode::gridTime(int64_t k, double period) {
+  const long double s = static_cast<long double>(k) * static_cast<long double>(period);
+  const long double whole = std::floor(s);
+  int64_t nsec = std::llround((s - whole) * 1e9L);
+  int64_t sec = static_cast<int64_t>(whole);
+  if (nsec >= 1000000000) {
+    nsec -= 1000000000;
+    ++sec;
+  }
+  return ros::Time(static_cast<uint32_t>(sec), static_cast<uint32_t>(nsec));
+}
+
+int64_t HairSimNode::gridIndexAtOrBefore(const ros::Time& t, double period) {
+  const long double s = static_cast<long double>(t.sec) + static_cast<long double>(t.nsec) * 1e-9L;
+  auto k = static_cast<int64_t>(std::floor(s / static_cast<long double>(period)));
+  while (k > 0 && gridTime(k, period) > t) --k;  // rounding of the quotient
+  while (gridTime(k + 1, period) <= t) ++k;
+  return k;
+}
+
+void HairSimNode::snapSimTime(const ros::Time& t) {
+  sim_step_ = gridIndexAtOrBefore(t, config_.physics.substep);
+  sim_time_ = gridTime(sim_step_, config_.physics.substep);
 }
 
 void HairSimNode::applyLiveSettings() {

@@ -12,6 +12,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <boost/shared_ptr.hpp>
+#include <cstdint>
 
 #include <map>
 #include <memory>
@@ -72,14 +73,20 @@ class HairSimNode {
   /// hair_state and hair_markers: the hair drawn with the head at `pose`, bodies at `body_frames`.
   void publishOutputs(const ros::Time& stamp, const Iso3& pose, const std::vector<Iso3>& body_frames);
   void publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames);
+  /// k * period as a ROS time, and the largest k with k * period <= t (long double: exact to the nanosecond).
+  static ros::Time gridTime(int64_t k, double period);
+  static int64_t gridIndexAtOrBefore(const ros::Time& t, double period);
+  /// Moves the substep grid to its last point at or before t (a start or a skip ahead).
+  void snapSimTime(const ros::Time& t);
   /// Takes the live settings (dynamic_reconfigure) changed since the last call, between two substeps.
   void applyLiveSettings();
 
   ros::NodeHandle nh_, pnh_;
   tf2_ros::Buffer tf_buffer_;
   ros::Subscriber tf_sub_, tf_static_sub_;
-  ros::Time last_tf_receipt_;      ///< to clear the buffer when time jumps back, as tf2_ros does
-  ros::Time next_publish_;         ///< when the next output is due (ROS time)
+  ros::Time last_tf_receipt_;  ///< to clear the buffer when time jumps back, as tf2_ros does
+  ros::Time
+      next_publish_;  ///< when the next output is due: stamp of the head pose (a multiple of the period)
   ros::WallTime last_tf_publish_;  ///< last output made on a tf arrival
   ros::Subscriber wind_sub_, events_sub_;
   ros::Publisher markers_pub_, bodies_pub_, state_pub_, events_pub_;
@@ -104,6 +111,10 @@ class HairSimNode {
   std::unique_ptr<HairMeshBuilder> meshes_;
   HeadMotionEstimator head_;
   bool started_ = false;
+  /// The substeps lie on a grid fixed in ROS time, sim_time_ = gridTime(sim_step_) = sim_step_ * substep, so
+  /// that a replay of the same tf (rosbag, use_sim_time) samples the head at the same instants as the live
+  /// run.
+  int64_t sim_step_ = 0;
   ros::Time sim_time_;
   std::vector<Iso3> last_body_frames_;
   std::vector<Iso3> published_body_frames_;
