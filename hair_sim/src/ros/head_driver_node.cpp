@@ -398,21 +398,34 @@ class HeadDriver {
              event.duration > 0.0 ? (" for " + toString(event.duration) + " s").c_str() : " until replaced");
   }
 
+  /// The timer (roscpp drops the ticks it is late for) sends the messages due on an absolute schedule of
+  /// ~rate per second from the start, so that a late callback (a loaded host) sends the ones it missed at
+  /// once and the rate holds on average; more than 0.1 s behind, the schedule skips ahead. Each message
+  /// is stamped when it is sent.
   void onTimer(const ros::TimerEvent&) {
     const ros::Time now = ros::Time::now();
     if (now.isZero()) return;  // simulated time not yet received
-    if (start_.isZero()) {
+    if (start_.isZero() || now < last_stamp_) {
+      if (!start_.isZero()) {
+        ROS_WARN("head_driver: time went backwards (%.3f -> %.3f): starting the motion again%s",
+                 last_stamp_.toSec(), now.toSec(), events_.size() > 0 ? ", events dropped" : "");
+        events_.clear();
+      }
       start_ = now;
       last_stamp_ = ros::Time();
+      sent_ = 0;
     }
-    if (now < last_stamp_) {
-      ROS_WARN("head_driver: time went backwards (%.3f -> %.3f): starting the motion again%s",
-               last_stamp_.toSec(), now.toSec(), events_.size() > 0 ? ", events dropped" : "");
-      start_ = now;
-      events_.clear();
-    } else if (now == last_stamp_) {
-      return;  // same stamp twice (simulated clock slower than the rate): tf2 would reject it
+    const auto due = static_cast<int64_t>(std::floor((now - start_).toSec() * rate_)) + 1;
+    const auto backlog_cap = static_cast<int64_t>(std::ceil(0.1 * rate_));
+    if (due - sent_ > backlog_cap) sent_ = due - 1;  // a stall: skip ahead rather than flood
+    for (; sent_ < due; ++sent_) {
+      const ros::Time stamp = ros::Time::now();
+      if (stamp <= last_stamp_) return;  // same stamp again (simulated clock): tf2 would reject it
+      sendPose(stamp);
     }
+  }
+
+  void sendPose(const ros::Time& now) {
     last_stamp_ = now;
     const HeadPose pose = headPoseAt(settings_, (now - start_).toSec());
     geometry_msgs::TransformStamped msg;
@@ -448,6 +461,7 @@ class HeadDriver {
   double rate_ = 100.0;
   ros::Time start_;
   ros::Time last_stamp_;
+  int64_t sent_ = 0;  ///< messages sent since start_ (the schedule)
 };
 
 }  // namespace head_driver
