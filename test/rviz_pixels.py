@@ -7,6 +7,8 @@ when it is brown and saturated: r > g > b and (r - b) / r > 0.45. The skin-colou
 Asserted, for each shot: hair pixels > 3 % of the view. Between consecutive shots (1 s apart, the head
 moving): the hair masks differ (XOR) in > 0.5 % of the view.
 Usage: rviz_pixels.py SHOT.png SHOT.png [...]; prints the numbers; exit status 1 on failure.
+       rviz_pixels.py --drawn SHOT.png: exit status 0 when the shot has hair pixels (> 3 % of the view), else 1
+       (rviz_screenshots.sh waits for this before its shots: software rendering may take a while to draw).
 """
 import sys
 
@@ -43,4 +45,6 @@ def main(paths):
 
 
 if __name__ == '__main__':
+    if len(sys.argv) == 3 and sys.argv[1] == '--drawn':
+        sys.exit(0 if hair_mask(sys.argv[2]).mean() > MIN_HAIR else 1)
     sys.exit(main(sys.argv[1:]))

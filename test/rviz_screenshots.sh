@@ -8,7 +8,7 @@ set -eo pipefail
 ROOT=$1 DEVEL=$2 OUT=$3
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 mkdir -p "$OUT"
-rm -f "$OUT"/shot_*.png
+rm -f "$OUT"/shot_*.png "$OUT"/waiting.png
 if [ -z "$INSIDE_XVFB" ]; then
   exec xvfb-run -a -s "-screen 0 1280x960x24" env INSIDE_XVFB=1 LIBGL_ALWAYS_SOFTWARE=1 "$0" "$@"
 fi
@@ -26,7 +26,16 @@ for _ in $(seq 1 60); do
   sleep 0.5
 done
 [ $ok = 1 ] || { tail -30 "$OUT/roslaunch.log"; echo "rviz_screenshots: FAIL: no hair_state"; exit 1; }
-sleep 6  # rviz draws markers about 1 s after it starts; software rendering is slow to warm up
+# rviz draws markers a few seconds after it starts (software rendering is slow to warm up, and an Xvfb
+# capture can be all black before rviz's first frame): wait until a capture shows hair, up to 60 s.
+drawn=0
+for _ in $(seq 1 60); do
+  sleep 1
+  /usr/bin/import -window root "$OUT/waiting.png" 2>/dev/null || continue
+  if python3 "$ROOT/test/rviz_pixels.py" --drawn "$OUT/waiting.png"; then drawn=1; break; fi
+done
+[ $drawn = 1 ] || echo "rviz_screenshots: no hair drawn within 60 s; taking the shots anyway"
+sleep 1
 for i in 1 2 3; do
   /usr/bin/import -window root "$OUT/shot_$i.png"
   sleep 1
