@@ -14,6 +14,12 @@
   test_d_bad_events_are_rejected
       `trigger` with a NaN wind, an unknown type and a gust peak above 4 x its mean: each rejected with
       the field named; the node keeps publishing.
+  test_e_wind_ramp_starts_at_its_stamp
+      Once the hair is still, a Wind (4 m/s along +x, no ramp) stamped 0.3 s ahead (within the node's
+      max_tf_age, 0.5 s): no hair_state stamped before it has the mean tip moved 0.5 mm, the first that
+      has is stamped within 0.25 s after it. Then still air stamped an hour ahead (further than max_tf_age
+      from the clock: taken on arrival, not an hour later): within 1.5 s of sending it the tips swing back
+      by more than half of what the wind moved them.
 """
 import math
 import threading
@@ -24,7 +30,7 @@ import rospy
 import rostest
 import tf2_ros
 from geometry_msgs.msg import Vector3
-from hair_sim_msgs.msg import HairEvent, HairState
+from hair_sim_msgs.msg import HairEvent, HairState, Wind
 from hair_sim_msgs.srv import Trigger
 
 NAME = 'event_checks'
@@ -51,10 +57,12 @@ class EventChecks(unittest.TestCase):
         cls.tf_listener = tf2_ros.TransformListener(cls.tf_buffer)
         cls.sub = rospy.Subscriber('hair_state', HairState, cls.on_state, queue_size=50)
         cls.events = rospy.Publisher('events', HairEvent, queue_size=10)
+        cls.wind = rospy.Publisher('wind', Wind, queue_size=10)
         rospy.wait_for_service('trigger', timeout=30.0)
         cls.trigger = rospy.ServiceProxy('trigger', Trigger)
         deadline = time.time() + 30.0
-        while time.time() < deadline and (len(cls.snapshot()) < 30 or cls.events.get_num_connections() < 2):
+        while time.time() < deadline and (len(cls.snapshot()) < 30 or cls.events.get_num_connections() < 2
+                                          or cls.wind.get_num_connections() < 1):
             time.sleep(0.1)
 
     @classmethod
@@ -140,6 +148,50 @@ class EventChecks(unittest.TestCase):
         count = len(self.snapshot())
         time.sleep(1.0)
         self.assertGreater(len(self.snapshot()), count + 10, 'the node stopped publishing')
+
+
+    def wait_still(self, seconds=1.0, tolerance=1e-4, limit=15.0):
+        """Waits (at most `limit` s) until the mean tip moved less than `tolerance` m over `seconds` s."""
+        deadline = time.time() + limit
+        while time.time() < deadline:
+            time.sleep(0.5)
+            states = self.snapshot()
+            recent = [tip for t, tip in states if t >= states[-1][0] - seconds]
+            if len(recent) > 10 and max(math.dist(tip, recent[-1]) for tip in recent) < tolerance:
+                return recent[-1]
+        self.fail('the hair did not come to rest within %.0f s' % limit)
+
+    def test_e_wind_ramp_starts_at_its_stamp(self):
+        before = self.wait_still()
+        wind = Wind()
+        wind.velocity.x = 4.0
+        wind.header.stamp = rospy.Time.now() + rospy.Duration(0.3)
+        stamp = wind.header.stamp.to_sec()
+        self.wind.publish(wind)
+        states = self.wait_until(stamp + 1.5)
+        first_moved = None
+        for t, tip in states:
+            moved = math.dist(tip, before)
+            if t < stamp:
+                if t > stamp - 1.0:
+                    self.assertLess(moved, 5e-4, 'the hair moved %.4f m at %.3f, before the wind at %.3f' %
+                                    (moved, t, stamp))
+            elif first_moved is None and moved > 5e-4:
+                first_moved = t
+        self.assertIsNotNone(first_moved, 'the wind had no effect')
+        rospy.loginfo('%s: wind stamped %.3f, hair moved from %.3f', NAME, stamp, first_moved)
+        self.assertLess(first_moved - stamp, 0.25)
+        blown = states[-1][1]
+        push = blown[0] - before[0]
+        self.assertGreater(push, 0.01)
+        calm = Wind()
+        calm.header.stamp = rospy.Time.now() + rospy.Duration(3600.0)
+        sent = rospy.Time.now().to_sec()
+        self.wind.publish(calm)
+        states = self.wait_until(sent + 1.5)
+        back = max(blown[0] - tip[0] for t, tip in states if t > sent)
+        rospy.loginfo('%s: still air stamped an hour ahead: tips back by %.4f m of %.4f m', NAME, back, push)
+        self.assertGreater(back, 0.5 * push, 'still air stamped an hour ahead was not taken on arrival')
 
 
 if __name__ == '__main__':

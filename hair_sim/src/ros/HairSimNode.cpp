@@ -196,7 +196,9 @@ bool HairSimNode::lookupPose(const std::string& frame, const ros::Time& stamp, I
 }
 
 Vec3 HairSimNode::windAt(double t) const {
-  const double s = wind_ramp_ > 0.0 ? std::min(1.0, std::max(0.0, (t - wind_start_) / wind_ramp_)) : 1.0;
+  const double s = t < wind_start_    ? 0.0
+                   : wind_ramp_ > 0.0 ? std::min(1.0, (t - wind_start_) / wind_ramp_)
+                                      : 1.0;
   Vec3 w = (1.0 - s) * wind_from_ + s * wind_to_;
   if (turbulence_ > 0.0) {
     // Smooth, deterministic fluctuation: incommensurate sines per axis, relative to the mean speed.
