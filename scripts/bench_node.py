@@ -28,10 +28,11 @@ def cpu_seconds(pid):
     return (int(fields[11]) + int(fields[12])) / ticks
 
 
-def window(pid, seconds, probe, markers):
-    """One measuring window: the probe's latencies and the node's CPU share over the same time."""
-    proc = subprocess.Popen([probe, '_seconds:=%g' % seconds, '_markers:=%s' % ('true' if markers else 'false')],
-                            stdout=subprocess.PIPE, universal_newlines=True)
+def window(pid, seconds, probe, markers, extra=()):
+    """One measuring window: the probe's latencies and the node's CPU share over the same time; `extra`:
+    more private parameters of the probe ('_name:=value')."""
+    proc = subprocess.Popen([probe, '_seconds:=%g' % seconds, '_markers:=%s' % ('true' if markers else 'false')]
+                            + list(extra), stdout=subprocess.PIPE, universal_newlines=True)
     line = proc.stdout.readline().strip()
     if line != 'recording':
         proc.wait()
