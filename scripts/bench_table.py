@@ -41,6 +41,9 @@ def main():
     for name in ('BM_Tessellate_CachedBasis', 'BM_Tessellate_ForwardDifferencing', 'BM_Tessellate_DeBoor'):
         if name in bench:
             lines.append('| %s | %.1f |' % (name.replace('BM_Tessellate_', ''), 1e9 / bench[name]['items_per_second']))
+    if 'BM_MeshBuild' in bench:  # the node's whole mesh per frame: tessellation, scalp, bodies, look
+        lines.append('| the node\'s mesh per frame (BM_MeshBuild: CachedBasis + scalp + bodies + look) | %.1f |'
+                     % (1e9 / bench['BM_MeshBuild']['items_per_second']))
     if node and 'error' not in node:
         lines += ['', '| node (default hairstyle, 30 Hz, markers subscribed) | value |', '|---|---|',
                   '| CPU share of one core | %.1f %% |' % (100.0 * node['cpu_share']),

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "hair_sim/core/Simulator.hpp"
+#include "hair_sim/core/geometry/HairMeshBuilder.hpp"
 #include "hair_sim/core/model/HairstyleGenerator.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
 #include "hair_sim/tools/OfflineRunner.hpp"
@@ -73,5 +74,48 @@ BENCHMARK(BM_StepExact)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMilli
 /// The lanes without AVX2 (what a CPU without it runs).
 void BM_StepBaseline(benchmark::State& state) { runStep(state, Simulator::StepPath::LanesBaseline); }
 BENCHMARK(BM_StepBaseline)->Arg(1000)->Unit(benchmark::kMillisecond);
+
+/// BM_MeshBuild: what hair_sim_node does for hair_markers each frame before filling the message, on the
+/// default config's 100 strips after 1 s of BM_Step's motion (hair lying on the bodies):
+/// HairMeshBuilder::build at the default level of detail (tessellation, root edge onto the scalp, vertices
+/// out of the 5 bodies, the look); items = vertices.
+void BM_MeshBuild(benchmark::State& state) {
+  const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
+  Iso3 rest = Iso3::Identity();
+  rest.translation() = Vec3(0.0, 0.0, 1.6);
+  const Hairstyle style = benchHairstyle(config, 100);
+  Simulator sim(style, config.physics, config.bodies);
+  HeadMotionEstimator head;
+  head.reset(rest);
+  const double dt = config.physics.substep;
+  Iso3 pose = rest;
+  std::vector<Iso3> frames;
+  for (int n = 1; n <= 240; ++n) {
+    pose.linear() = rotationFromRpy(Vec3(0.0, 0.2 * std::sin(3.0 * n * dt), 0.6 * std::sin(2.0 * n * dt)));
+    StepInputs in;
+    in.head = head.update(pose, dt);
+    in.wind = Vec3(1.5, 1.0, 0.0);
+    for (const Body& b : config.bodies)
+      in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
+    frames = in.body_frames;
+    sim.step(in);
+  }
+  std::vector<Vec3> points;
+  sim.positionsWorld(pose, points);
+  std::vector<Ellipsoid> bodies;
+  for (std::size_t b = 0; b < config.bodies.size(); ++b)
+    bodies.push_back(config.bodies[b].shape.transformed(frames[b]));
+  HairMeshBuilder builder(sim.hairstyle(), HairMeshOptions{});
+  const Ellipsoid scalp = sim.hairstyle().scalp.transformed(pose);
+  for (auto _ : state) {
+    builder.build(points, sim.stripOffsets(), scalp, bodies);
+    benchmark::DoNotOptimize(builder.meshes().data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * builder.vertexCount());
+  state.counters["vertices"] = builder.vertexCount();
+  state.counters["projected"] = builder.projectedVertices();
+}
+BENCHMARK(BM_MeshBuild)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -28,6 +28,13 @@ void HairMeshBuilder::build(const std::vector<Vec3>& points, const std::vector<i
   if (strip_offsets.size() != hairstyle_.strips.size())
     throw std::invalid_argument("HairMeshBuilder::build(...) : " + std::to_string(strip_offsets.size()) +
                                 " strip offsets for " + std::to_string(hairstyle_.strips.size()) + " strips");
+  // A vertex farther from a body's centre than its largest radius (with 1e-9 to spare) is outside it: the
+  // exact test (a transform into the body's sphere space) only for the others.
+  body_reach2_.clear();
+  for (const Ellipsoid& e : bodies) {
+    const double reach = e.radii().maxCoeff() * (1.0 + 1e-9);
+    body_reach2_.push_back(reach * reach);
+  }
   for (std::size_t s = 0; s < hairstyle_.strips.size(); ++s) {
     const Strip& strip = hairstyle_.strips[s];
     const std::size_t first = static_cast<std::size_t>(strip_offsets[s]);
@@ -42,8 +49,9 @@ void HairMeshBuilder::build(const std::vector<Vec3>& points, const std::vector<i
     }
     for (std::size_t k = static_cast<std::size_t>(mesh.n_u); k < mesh.positions.size(); ++k) {
       Vec3& p = mesh.positions[k];
-      for (const Ellipsoid& e : bodies) {
-        if (e.implicitValue(p) >= 0.0) continue;
+      for (std::size_t b = 0; b < bodies.size(); ++b) {
+        const Ellipsoid& e = bodies[b];
+        if ((p - e.center()).squaredNorm() > body_reach2_[b] || e.implicitValue(p) >= 0.0) continue;
         const Ellipsoid::ClosestPoint cp = e.closestPoint(p);
         p = cp.point + 1e-6 * cp.normal;
         ++projected_;

@@ -48,6 +48,7 @@ class HairMeshBuilder {
   std::vector<StripMesh> meshes_;
   std::vector<std::vector<Rgba>> colours_;
   std::vector<Vec3> scratch_;
+  std::vector<double> body_reach2_;  ///< per body of the last build(): (largest radius)^2, a little over
   int projected_ = 0;
 };
 
