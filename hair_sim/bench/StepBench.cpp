@@ -35,12 +35,13 @@ void BM_Setup(benchmark::State& state) {
 }
 BENCHMARK(BM_Setup)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
 
-void runStep(benchmark::State& state, Simulator::StepPath path) {
+void runStep(benchmark::State& state, Simulator::StepPath path, int threads = 1) {
   const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
   Iso3 rest = Iso3::Identity();
   rest.translation() = Vec3(0.0, 0.0, 1.6);
   Simulator sim(benchHairstyle(config, static_cast<int>(state.range(0))), config.physics, config.bodies);
   sim.setStepPath(path);
+  sim.setThreads(threads);
   HeadMotionEstimator head;
   head.reset(rest);
   const double dt = config.physics.substep;
@@ -74,6 +75,9 @@ BENCHMARK(BM_StepExact)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMilli
 /// The lanes without AVX2 (what a CPU without it runs).
 void BM_StepBaseline(benchmark::State& state) { runStep(state, Simulator::StepPath::LanesBaseline); }
 BENCHMARK(BM_StepBaseline)->Arg(1000)->Unit(benchmark::kMillisecond);
+/// The default path with a helper thread (Simulator::setThreads(2)): items per second of wall time.
+void BM_Step2Threads(benchmark::State& state) { runStep(state, Simulator::StepPath::Lanes, 2); }
+BENCHMARK(BM_Step2Threads)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 /// BM_MeshBuild: what hair_sim_node does for hair_markers each frame before filling the message, on the
 /// default config's 100 strips after 1 s of BM_Step's motion (hair lying on the bodies):

@@ -289,10 +289,11 @@ TEST(SimulatorTest, IdenticalInputsGiveBitIdenticalResults) {
 /// step paths of Simulator::StepPath on the same inputs. Returns the control points after `steps` substeps
 /// and the strips that went to the exact step over the run.
 std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude, long* exact_strips = nullptr,
-                          double* max_penetration = nullptr) {
+                          double* max_penetration = nullptr, int threads = 1) {
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
   Simulator sim(loadHairstyle(config.hairstyle_file), config.physics, config.bodies);
   sim.setStepPath(path);
+  sim.setThreads(threads);
   HeadMotionEstimator head;
   Iso3 rest = Iso3::Identity();
   rest.translation() = Vec3(0.0, 0.0, 1.6);
@@ -333,6 +334,51 @@ TEST(SimulatorTest, LanePathGivesTheSameBitsWithAndWithoutAvx2) {
   const long strip_steps = static_cast<long>(loadHairstyle(config.hairstyle_file).strips.size()) * steps;
   EXPECT_GT(exact, 0);
   EXPECT_LT(exact, strip_steps / 2);
+}
+
+TEST(SimulatorTest, HelperThreadsGiveTheSameBits) {
+  // Helper threads only compute blocks of chains (each from its own chains' state at the start of the
+  // substep); the calling thread commits the strips in order: any thread count gives the same hair.
+  long exact1 = 0, exact2 = 0, exact3 = 0;
+  const int steps = 480;
+  const std::vector<Vec3> one = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact1, nullptr, 1);
+  const std::vector<Vec3> two = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact2, nullptr, 2);
+  const std::vector<Vec3> three = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact3, nullptr, 3);
+  const std::vector<Vec3> baseline2 =
+      runPath(Simulator::StepPath::LanesBaseline, steps, 1.0, nullptr, nullptr, 2);
+  ASSERT_EQ(one.size(), two.size());
+  ASSERT_EQ(one.size(), three.size());
+  EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(Vec3)));
+  EXPECT_EQ(0, std::memcmp(one.data(), three.data(), one.size() * sizeof(Vec3)));
+  EXPECT_EQ(0, std::memcmp(one.data(), baseline2.data(), one.size() * sizeof(Vec3)));
+  EXPECT_GT(exact1, 0);  // the exact step ran between the blocks (strips the constraints moved)
+  EXPECT_EQ(exact1, exact2);
+  EXPECT_EQ(exact1, exact3);
+}
+
+TEST(SimulatorTest, SetThreadsTakesOneToSixtyFour) {
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  Simulator sim(loadHairstyle(config.hairstyle_file), config.physics, config.bodies);
+  EXPECT_EQ(sim.threads(), 1);
+  sim.setThreads(2);
+  EXPECT_EQ(sim.threads(), 2);
+  for (int bad : {0, -1, 65}) {
+    try {
+      sim.setThreads(bad);
+      ADD_FAILURE() << "setThreads(" << bad << ") accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("got " + std::to_string(bad)), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(sim.threads(), 2);  // a refused count changes nothing
+  sim.setThreads(1);
+  EXPECT_EQ(sim.threads(), 1);
+  Simulator moved(std::move(sim));  // the helpers go with the state
+  moved.setThreads(2);
+  StepInputs in;
+  in.body_frames.assign(config.bodies.size(), Iso3::Identity());
+  for (int i = 0; i < 10; ++i) moved.step(in);
+  for (const Vec3& p : moved.positionsHead()) EXPECT_TRUE(p.allFinite());
 }
 
 TEST(SimulatorTest, LanePathFollowsTheExactStep) {

@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "LaneWorkers.hpp"
 #include "RotationSeries.hpp"
 #include "StepLanes.hpp"
 
@@ -171,6 +172,10 @@ void Simulator::buildLanes() {
           strip_offset_[si] + s.index(r, c);
   }
   for (int& m : block_margin_) m = std::max(m, -1);
+  strip_last_block_.assign(hairstyle_.strips.size(), 0);
+  for (std::size_t ch = 0; ch < chains.size(); ++ch)
+    strip_last_block_[static_cast<std::size_t>(chains[ch].first)] = static_cast<int>(ch / W);
+  block_flags_.assign(blocks * W, 0);
   const std::size_t n = positions_.size();
   new_position_.assign(n, Vec3::Zero());
   new_direction_.assign(n, Vec3::UnitZ());
@@ -235,26 +240,46 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   job.head_rotation_inverse = &f.Rt;
   const bool baseline = step_path_ == StepPath::LanesBaseline;
   const std::size_t stride = static_cast<std::size_t>(lane_stride_rows_) * W;
-  for (std::size_t blk = 0; blk < block_rows_.size(); ++blk) {
-    const int* strips = &lane_strip_[blk * W];
-    if (block_margin_[blk] < 0) {
-      for (int l = 0; l < W; ++l)
-        if (strips[l] >= 0) strip_exact_from_[static_cast<std::size_t>(strips[l])] = 0;
-      continue;
+  const std::size_t blocks = block_rows_.size();
+  // One block of chains: reads only its own chains' state at the start of the substep, writes only their
+  // new state and its flags (on any thread).
+  auto runBlock = [&](std::size_t blk, int) {
+    if (block_margin_[blk] < 0) return;
+    lanes::BlockJob j = job;
+    j.rows = block_rows_[blk];
+    j.point = &lane_point_[blk * stride];
+    j.bodies = nb > 0 ? &lane_bodies_[static_cast<std::size_t>(block_margin_[blk]) * nb] : nullptr;
+    lanes::stepBlock(j, baseline);
+    std::copy(j.first_flagged_row, j.first_flagged_row + W, &block_flags_[blk * W]);
+  };
+  // The exact step takes over at the first flagged place of the strip in its sweep order (column by
+  // column, root to tip): the places before it are the lanes'. Blocks are read in order, each once all its
+  // lanes are computed.
+  std::size_t read_blocks = 0;
+  auto readBlocksThrough = [&](std::size_t last) {
+    for (; read_blocks <= last && read_blocks < blocks; ++read_blocks) {
+      const std::size_t blk = read_blocks;
+      if (workers_) workers_->waitFor(blk);
+      const int* strips = &lane_strip_[blk * W];
+      for (int l = 0; l < W; ++l) {
+        if (strips[l] < 0) continue;
+        const std::size_t si = static_cast<std::size_t>(strips[l]);
+        if (block_margin_[blk] < 0) {
+          strip_exact_from_[si] = 0;
+          continue;
+        }
+        const int flagged = block_flags_[blk * W + static_cast<std::size_t>(l)];
+        if (!flagged) continue;
+        const int column = lane_point_[blk * stride + static_cast<std::size_t>(l)] - strip_offset_[si];
+        strip_exact_from_[si] =
+            std::min(strip_exact_from_[si], column * hairstyle_.strips[si].rows + flagged);
+      }
     }
-    job.rows = block_rows_[blk];
-    job.point = &lane_point_[blk * stride];
-    job.bodies = nb > 0 ? &lane_bodies_[static_cast<std::size_t>(block_margin_[blk]) * nb] : nullptr;
-    lanes::stepBlock(job, baseline);
-    // The exact step takes over at the first flagged place of the strip in its sweep order (column by
-    // column, root to tip): the places before it are the lanes'.
-    for (int l = 0; l < W; ++l) {
-      if (!job.first_flagged_row[l] || strips[l] < 0) continue;
-      const std::size_t si = static_cast<std::size_t>(strips[l]);
-      const int column = job.point[l] - strip_offset_[si];
-      const int key = column * hairstyle_.strips[si].rows + job.first_flagged_row[l];
-      strip_exact_from_[si] = std::min(strip_exact_from_[si], key);
-    }
+  };
+  if (workers_) {
+    workers_->start(blocks, runBlock);
+  } else {
+    for (std::size_t blk = 0; blk < blocks; ++blk) runBlock(blk, 0);
   }
 
   // In strip order, as the exact step goes: a strip is committed from the lanes when the spring band holds
@@ -265,6 +290,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   double max_rate2 = 0.0;
   exact_strips_ = 0;
   for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
+    readBlocksThrough(static_cast<std::size_t>(strip_last_block_[si]));
     const Strip& s = hairstyle_.strips[si];
     const int first = strip_offset_[si] + s.columns;
     const int end = strip_offset_[si] + s.pointCount();
@@ -292,8 +318,24 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     for (std::size_t i = static_cast<std::size_t>(first); i < static_cast<std::size_t>(end); ++i)
       max_rate2 = std::max(max_rate2, commitLanes(i));
   }
+  if (workers_) workers_->finish();
   tally.max_rate2 = std::max(tally.max_rate2, max_rate2);
 }
+
+Simulator::~Simulator() = default;
+Simulator::Simulator(Simulator&&) noexcept = default;
+Simulator& Simulator::operator=(Simulator&&) noexcept = default;
+
+void Simulator::setThreads(int threads) {
+  if (threads < 1 || threads > 64)
+    throw std::invalid_argument("Simulator::setThreads(...) : threads must be in [1, 64], got " +
+                                std::to_string(threads));
+  if (threads == this->threads()) return;
+  workers_.reset();
+  if (threads > 1) workers_ = std::make_unique<LaneWorkers>(threads - 1);
+}
+
+int Simulator::threads() const { return workers_ ? workers_->helpers() + 1 : 1; }
 
 double Simulator::commitLanes(std::size_t i) {
   positions_[i] = new_position_[i];

@@ -36,6 +36,7 @@
 /// proximity_factor x rest length nor spread wider than far_factor x it, unless the bodies (which keep
 /// the last word) forbid every placement: in one simulated hour of the soak, 4 substeps, all under a
 /// nod of pi/2 at 20 Hz.
+#include <memory>
 #include <vector>
 
 #include "hair_sim/core/dynamics/HeadState.hpp"
@@ -45,6 +46,8 @@
 #include "hair_sim/core/model/PhysicsParameters.hpp"
 
 namespace hair_sim {
+
+class LaneWorkers;
 
 namespace lanes {
 /// Internal to step()'s vectorised path: one body inflated by a strip's margin, in the head frame, now and
@@ -93,6 +96,9 @@ class Simulator {
 
   /// Throws std::invalid_argument on invalid parameters or hairstyle.
   Simulator(Hairstyle hairstyle, PhysicsParameters parameters, std::vector<Body> bodies = {});
+  ~Simulator();
+  Simulator(Simulator&&) noexcept;
+  Simulator& operator=(Simulator&&) noexcept;
 
   /// Back to the styled rest shape, still.
   void reset();
@@ -111,6 +117,12 @@ class Simulator {
 
   void setStepPath(StepPath path) { step_path_ = path; }
   StepPath stepPath() const { return step_path_; }
+  /// Threads for the Lanes paths (1 = the calling thread only, the default): threads - 1 helper threads
+  /// compute blocks of chains while the calling thread commits the strips in order (the exact step and the
+  /// band stay on it), so the hair is bit-identical with any count. Throws std::invalid_argument outside
+  /// [1, 64].
+  void setThreads(int threads);
+  int threads() const;
   /// Strips the last step() gave to the exact per-strip step (all of them on the Exact path).
   int exactStripCount() const { return exact_strips_; }
 
@@ -314,6 +326,9 @@ class Simulator {
   std::vector<int> strip_exact_from_;
   static constexpr int kNoExact = 1 << 30;
   std::vector<lanes::LaneBody> lane_bodies_;  ///< [margin][body], this substep
+  std::vector<int> strip_last_block_;         ///< per strip, the block of its last chain
+  std::vector<int> block_flags_;              ///< [block][lane]: lanes::BlockJob::first_flagged_row
+  std::unique_ptr<LaneWorkers> workers_;      ///< the helper threads (setThreads), or none
 };
 
 /// Rotation vector that turns unit a onto unit b (axis a x b, angle in [0, pi]); a deterministic

@@ -1,0 +1,56 @@
+#pragma once
+/// Internal to the core: the helper threads of Simulator::setThreads. Each substep of the Lanes path hands
+/// them its blocks of chains (lanes::stepBlock, which reads only the block's own chains at the start of
+/// the substep and writes only their new state); the calling thread commits the strips in order as their
+/// blocks complete and computes blocks itself while it waits. Which thread computes a block does not change
+/// its result, so the hair is the same bit for bit with any number of threads.
+#include <atomic>
+#include <condition_variable>
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace hair_sim {
+
+class LaneWorkers {
+ public:
+  /// Starts `helpers` threads that wait for work.
+  explicit LaneWorkers(int helpers);
+  /// Stops and joins the threads (after the current substep's blocks).
+  ~LaneWorkers();
+  LaneWorkers(const LaneWorkers&) = delete;
+  LaneWorkers& operator=(const LaneWorkers&) = delete;
+
+  int helpers() const { return static_cast<int>(threads_.size()); }
+
+  /// Starts a substep of `blocks` blocks: run(block, thread) computes one (thread 0 is the caller, 1.. the
+  /// helpers: an index for per-thread scratch). `run` must stay valid until finish().
+  void start(std::size_t blocks, std::function<void(std::size_t, int)> run);
+  /// Returns once block b is computed, computing unclaimed blocks on the calling thread meanwhile.
+  void waitFor(std::size_t b);
+  /// Returns once every block is computed and every helper is idle again.
+  void finish();
+
+ private:
+  void loop(int thread);
+  /// Claims and computes the next block; false when none is left.
+  bool runOne(int thread);
+
+  std::vector<std::thread> threads_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool quit_ = false;
+  long generation_ = 0;                     ///< substeps started (guarded by mutex_ for the helpers' wake-up)
+  std::atomic<long> active_generation_{0};  ///< the substep whose blocks are handed out
+  std::function<void(std::size_t, int)> run_;
+  std::size_t blocks_ = 0;
+  std::atomic<std::size_t> next_{0};
+  std::unique_ptr<std::atomic<long>[]> done_;  ///< per block: the generation in which it was computed
+  std::size_t done_size_ = 0;
+  std::atomic<int> busy_{0};  ///< helpers inside the current substep
+};
+
+}  // namespace hair_sim
