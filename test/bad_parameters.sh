@@ -46,6 +46,8 @@ expect_refused "samples_across of the wrong type" "parameter ~samples_across: '2
   _config_file:="$CONFIG" _samples_across:=2.5
 expect_refused "render_mode unknown" "parameter ~render_mode: 'cubes' must be mesh, strands or both" \
   _config_file:="$CONFIG" _render_mode:=cubes
+expect_refused "threads 0" "parameter ~threads: '0' must be in 1..64" \
+  _config_file:="$CONFIG" _threads:=0
 expect_refused "teleport_distance 0" "parameter ~teleport_distance: '0' must be > 0 m" \
   _config_file:="$CONFIG" _teleport_distance:=0.0
 expect_refused "max_tf_age negative" "parameter ~max_tf_age: '-1' must be > 0 s" \

@@ -79,10 +79,11 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(n
   status_since_ = ros::WallTime::now();
   ROS_INFO(
       "hair_sim: %zu strips, %d control points, %zu bodies, substep %.5f s, publishing at %.1f Hz in '%s', "
-      "head frame '%s', level of detail %d x %d",
+      "head frame '%s', level of detail %d x %d, %d step thread%s",
       simulator_->hairstyle().strips.size(), simulator_->controlPointCount(), config_.bodies.size(),
       config_.physics.substep, config_.publish_rate, config_.world_frame.c_str(), config_.head_frame.c_str(),
-      meshes_->levelOfDetail().samples_across, meshes_->levelOfDetail().samples_along);
+      meshes_->levelOfDetail().samples_across, meshes_->levelOfDetail().samples_along, simulator_->threads(),
+      simulator_->threads() == 1 ? "" : "s");
 }
 
 void HairSimNode::readParameters() {
@@ -156,6 +157,8 @@ void HairSimNode::readParameters() {
   readParam(pnh_, "max_tf_age", max_tf_age_);
   if (!(std::isfinite(max_tf_age_) && max_tf_age_ > 0.0))
     throw badParam("max_tf_age", formatDouble(max_tf_age_), "must be > 0 s");
+  readParam(pnh_, "threads", threads_);
+  if (threads_ < 1 || threads_ > 64) throw badParam("threads", std::to_string(threads_), "must be in 1..64");
   readParam(pnh_, "strands_per_strip", strands_per_strip_);
   if (strands_per_strip_ < 1)
     throw badParam("strands_per_strip", std::to_string(strands_per_strip_), "must be >= 1");
@@ -166,6 +169,7 @@ void HairSimNode::readParameters() {
 
 void HairSimNode::rebuild(Hairstyle hairstyle) {
   simulator_ = std::make_unique<Simulator>(std::move(hairstyle), config_.physics, config_.bodies);
+  simulator_->setThreads(threads_);
   meshes_ = std::make_unique<HairMeshBuilder>(simulator_->hairstyle(), mesh_options_);
 }
 

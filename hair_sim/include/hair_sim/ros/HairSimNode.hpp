@@ -98,6 +98,7 @@ class HairSimNode {
   RenderMode render_mode_ = RenderMode::Mesh;
   HairMeshOptions mesh_options_;
   int max_substeps_per_update_ = 60;
+  int threads_ = 1;          ///< Simulator::setThreads
   double max_tf_age_ = 0.5;  ///< s: a newer head pose than this is expected; older = stale
   bool head_stale_ = false;
   ros::Time newest_head_stamp_;  ///< stamp of the newest head pose at the last update (time going back)
