@@ -25,8 +25,9 @@ def main():
         with open(sys.argv[2]) as f:
             node = json.load(f)
     lines = ['| strips | control points | ns per control-point update | real-time factor at 240 Hz '
-             '| strips in the exact step | exact step alone, ns per update (ratio) |',
-             '|---|---|---|---|---|---|']
+             '| strips in the exact step | exact step alone, ns per update (ratio) '
+             '| 2 threads, ns per update of wall time (speed-up) |',
+             '|---|---|---|---|---|---|---|']
     for name in sorted((n for n in bench if n.startswith('BM_Step/')), key=lambda n: int(n.split('/')[1])):
         b = bench[name]
         ns = 1e9 / b['items_per_second']
@@ -34,9 +35,12 @@ def main():
         exact = bench.get(name.replace('BM_Step/', 'BM_StepExact/'))
         exact_ns = '%.0f (%.2f x)' % (1e9 / exact['items_per_second'], 1e9 / exact['items_per_second'] / ns) \
             if exact else '-'
-        lines.append('| %s | %s | %.0f | %.2f | %.1f %% | %s |' % (
+        two = next((bench[n] for n in bench if n.split('/')[:2] == ['BM_Step2Threads', name.split('/')[1]]), None)
+        two_ns = '%.0f (%.2f x)' % (1e9 / two['items_per_second'], ns / (1e9 / two['items_per_second'])) \
+            if two else '-'
+        lines.append('| %s | %s | %.0f | %.2f | %.1f %% | %s | %s |' % (
             format(int(b['strips']), ','), format(points, ','), ns, 1.0 / (ns * 1e-9 * points * SUBSTEP_RATE),
-            100.0 * b.get('exact_share', 0.0), exact_ns))
+            100.0 * b.get('exact_share', 0.0), exact_ns, two_ns))
     lines += ['', '| tessellation (default hairstyle and level of detail) | ns per vertex |', '|---|---|']
     for name in ('BM_Tessellate_CachedBasis', 'BM_Tessellate_ForwardDifferencing', 'BM_Tessellate_DeBoor'):
         if name in bench:
