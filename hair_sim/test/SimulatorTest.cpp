@@ -9,6 +9,7 @@
 
 #include "TestUtil.hpp"
 #include "hair_sim/core/events/EventSchedule.hpp"
+#include "hair_sim/core/model/HairstyleGenerator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
 
@@ -288,10 +289,17 @@ TEST(SimulatorTest, IdenticalInputsGiveBitIdenticalResults) {
 /// The default hairstyle with the default bodies, springs on, under a shaking and nodding head in wind: the
 /// step paths of Simulator::StepPath on the same inputs. Returns the control points after `steps` substeps
 /// and the strips that went to the exact step over the run.
+/// The default hairstyle, or (generated_strips > 0) one generated with that many strips.
 std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude, long* exact_strips = nullptr,
-                          double* max_penetration = nullptr, int threads = 1) {
+                          double* max_penetration = nullptr, int threads = 1, int generated_strips = 0) {
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
-  Simulator sim(loadHairstyle(config.hairstyle_file), config.physics, config.bodies);
+  Iso3 head_rest = Iso3::Identity();
+  head_rest.translation() = Vec3(0.0, 0.0, 1.6);
+  GeneratorOptions generated;
+  generated.strips = generated_strips;
+  Simulator sim(generated_strips > 0 ? generateHairstyle(config, head_rest, generated)
+                                     : loadHairstyle(config.hairstyle_file),
+                config.physics, config.bodies);
   sim.setStepPath(path);
   sim.setThreads(threads);
   HeadMotionEstimator head;
@@ -338,14 +346,16 @@ TEST(SimulatorTest, LanePathGivesTheSameBitsWithAndWithoutAvx2) {
 
 TEST(SimulatorTest, HelperThreadsGiveTheSameBits) {
   // Helper threads only compute blocks of chains (each from its own chains' state at the start of the
-  // substep); the calling thread commits the strips in order: any thread count gives the same hair.
+  // substep); the calling thread commits the strips in order: any thread count gives the same hair. 600
+  // strips (300 blocks of 4 chains): over the 128 blocks from which the helpers take part.
   long exact1 = 0, exact2 = 0, exact3 = 0;
-  const int steps = 480;
-  const std::vector<Vec3> one = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact1, nullptr, 1);
-  const std::vector<Vec3> two = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact2, nullptr, 2);
-  const std::vector<Vec3> three = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact3, nullptr, 3);
+  const int steps = 120, strips = 600;
+  const std::vector<Vec3> one = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact1, nullptr, 1, strips);
+  const std::vector<Vec3> two = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact2, nullptr, 2, strips);
+  const std::vector<Vec3> three =
+      runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact3, nullptr, 3, strips);
   const std::vector<Vec3> baseline2 =
-      runPath(Simulator::StepPath::LanesBaseline, steps, 1.0, nullptr, nullptr, 2);
+      runPath(Simulator::StepPath::LanesBaseline, steps, 1.0, nullptr, nullptr, 2, strips);
   ASSERT_EQ(one.size(), two.size());
   ASSERT_EQ(one.size(), three.size());
   EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(Vec3)));

@@ -119,8 +119,8 @@ class Simulator {
   StepPath stepPath() const { return step_path_; }
   /// Threads for the Lanes paths (1 = the calling thread only, the default): threads - 1 helper threads
   /// compute blocks of chains while the calling thread commits the strips in order (the exact step and the
-  /// band stay on it), so the hair is bit-identical with any count. Throws std::invalid_argument outside
-  /// [1, 64].
+  /// band stay on it), so the hair is bit-identical with any count. Hairstyles of fewer than 512 chains
+  /// (kMinBlocksForHelpers blocks) stay on the calling thread. Throws std::invalid_argument outside [1, 64].
   void setThreads(int threads);
   int threads() const;
   /// Strips the last step() gave to the exact per-strip step (all of them on the Exact path).
@@ -329,6 +329,7 @@ class Simulator {
   std::vector<int> strip_last_block_;         ///< per strip, the block of its last chain
   std::vector<int> block_flags_;              ///< [block][lane]: lanes::BlockJob::first_flagged_row
   std::unique_ptr<LaneWorkers> workers_;      ///< the helper threads (setThreads), or none
+  static constexpr std::size_t kMinBlocksForHelpers = 128;  ///< 512 chains, 256 strips of 2 columns
 };
 
 /// Rotation vector that turns unit a onto unit b (axis a x b, angle in [0, pi]); a deterministic
