@@ -80,6 +80,20 @@ HairDisplay::HairDisplay() {
 
 HairDisplay::~HairDisplay() = default;
 
+void HairDisplay::subscribe() {
+  if (!isEnabled()) return;
+  try {
+    const ros::TransportHints hints = unreliable_property_->getBool()
+                                          ? ros::TransportHints().unreliable()
+                                          : ros::TransportHints().reliable().tcpNoDelay();
+    sub_.subscribe(update_nh_, topic_property_->getTopicStd(),
+                   static_cast<uint32_t>(queue_size_property_->getInt()), hints);
+    setStatus(rviz::StatusProperty::Ok, "Topic", "OK");
+  } catch (const ros::Exception& e) {
+    setStatus(rviz::StatusProperty::Error, "Topic", QString("Error subscribing: ") + e.what());
+  }
+}
+
 void HairDisplay::onInitialize() {
   MFDClass::onInitialize();
   visual_ = std::make_unique<HairVisual>(context_->getSceneManager(), scene_node_);
