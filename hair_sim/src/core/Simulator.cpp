@@ -279,6 +279,13 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       }
     }
   };
+  // The helpers hold references into this frame: they are done before it ends, whatever happens.
+  struct FinishHelpers {
+    LaneWorkers* workers;
+    ~FinishHelpers() {
+      if (workers) workers->finish();
+    }
+  } finish_helpers{workers};
   if (workers) {
     workers->start(blocks, runBlock);
   } else {
@@ -321,7 +328,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     for (std::size_t i = static_cast<std::size_t>(first); i < static_cast<std::size_t>(end); ++i)
       max_rate2 = std::max(max_rate2, commitLanes(i));
   }
-  if (workers) workers->finish();
   tally.max_rate2 = std::max(tally.max_rate2, max_rate2);
 }
 
