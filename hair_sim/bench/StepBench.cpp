@@ -23,6 +23,20 @@ Hairstyle benchHairstyle(const SimConfig& config, int strips) {
   return generateHairstyle(config, rest, options);
 }
 
+/// The benchmarks' motion at substep n: the head nodding and turning in a steady wind, the bodies on the
+/// head moving with it; `pose` gets the head pose.
+StepInputs benchInputs(const SimConfig& config, const Iso3& rest, HeadMotionEstimator& head, long n,
+                       double dt, Iso3& pose) {
+  pose = rest;
+  pose.linear() = rotationFromRpy(Vec3(0.0, 0.2 * std::sin(3.0 * n * dt), 0.6 * std::sin(2.0 * n * dt)));
+  StepInputs in;
+  in.head = head.update(pose, dt);
+  in.wind = Vec3(1.5, 1.0, 0.0);
+  for (const Body& b : config.bodies)
+    in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
+  return in;
+}
+
 /// Simulator set-up (chains, rest compensation, spring pairs through the grid); items = strips.
 void BM_Setup(benchmark::State& state) {
   const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
@@ -47,16 +61,10 @@ void runStep(benchmark::State& state, Simulator::StepPath path, int threads = 1)
   const double dt = config.physics.substep;
   long n = 0;
   double exact = 0.0;
+  Iso3 pose;
   for (auto _ : state) {
     ++n;
-    Iso3 pose = rest;
-    pose.linear() = rotationFromRpy(Vec3(0.0, 0.2 * std::sin(3.0 * n * dt), 0.6 * std::sin(2.0 * n * dt)));
-    StepInputs in;
-    in.head = head.update(pose, dt);
-    in.wind = Vec3(1.5, 1.0, 0.0);
-    for (const Body& b : config.bodies)
-      in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
-    sim.step(in);
+    sim.step(benchInputs(config, rest, head, n, dt, pose));
     exact += sim.exactStripCount();
   }
   state.SetItemsProcessed(state.iterations() * sim.controlPointCount());
@@ -92,15 +100,10 @@ void BM_MeshBuild(benchmark::State& state) {
   HeadMotionEstimator head;
   head.reset(rest);
   const double dt = config.physics.substep;
-  Iso3 pose = rest;
+  Iso3 pose;
   std::vector<Iso3> frames;
-  for (int n = 1; n <= 240; ++n) {
-    pose.linear() = rotationFromRpy(Vec3(0.0, 0.2 * std::sin(3.0 * n * dt), 0.6 * std::sin(2.0 * n * dt)));
-    StepInputs in;
-    in.head = head.update(pose, dt);
-    in.wind = Vec3(1.5, 1.0, 0.0);
-    for (const Body& b : config.bodies)
-      in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
+  for (long n = 1; n <= 240; ++n) {
+    const StepInputs in = benchInputs(config, rest, head, n, dt, pose);
     frames = in.body_frames;
     sim.step(in);
   }
