@@ -12,11 +12,7 @@
 
 namespace {
 
-using hair_sim::LevelOfDetail;
-using hair_sim::StripMesh;
-using hair_sim::TessellationMethod;
-using hair_sim::Tessellator;
-using hair_sim::Vec3;
+using namespace hair_sim;
 
 /// FNV-1a over raw bytes.
 void hashBytes(std::uint64_t& hash, const void* data, std::size_t size) {
