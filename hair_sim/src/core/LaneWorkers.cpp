@@ -3,7 +3,7 @@
 namespace hair_sim {
 
 LaneWorkers::LaneWorkers(int helpers) {
-  for (int t = 0; t < helpers; ++t) threads_.emplace_back(&LaneWorkers::loop, this, t + 1);
+  for (int t = 0; t < helpers; ++t) threads_.emplace_back(&LaneWorkers::loop, this);
 }
 
 LaneWorkers::~LaneWorkers() {
@@ -15,7 +15,7 @@ LaneWorkers::~LaneWorkers() {
   for (std::thread& t : threads_) t.join();
 }
 
-void LaneWorkers::start(std::size_t blocks, std::function<void(std::size_t, int)> run) {
+void LaneWorkers::start(std::size_t blocks, void (*run)(void*, std::size_t), void* context) {
   if (blocks > done_size_) {
     done_.reset(new std::atomic<long>[blocks]);
     for (std::size_t b = 0; b < blocks; ++b) done_[b].store(0, std::memory_order_relaxed);
@@ -23,7 +23,8 @@ void LaneWorkers::start(std::size_t blocks, std::function<void(std::size_t, int)
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    run_ = std::move(run);
+    run_ = run;
+    context_ = context;
     blocks_ = blocks;
     next_.store(0, std::memory_order_relaxed);
     ++generation_;
@@ -33,10 +34,10 @@ void LaneWorkers::start(std::size_t blocks, std::function<void(std::size_t, int)
   wake_.notify_all();
 }
 
-bool LaneWorkers::runOne(int thread) {
+bool LaneWorkers::runOne() {
   const std::size_t b = next_.fetch_add(1, std::memory_order_relaxed);
   if (b >= blocks_) return false;
-  run_(b, thread);
+  run_(context_, b);
   done_[b].store(active_generation_.load(std::memory_order_relaxed), std::memory_order_release);
   return true;
 }
@@ -44,11 +45,11 @@ bool LaneWorkers::runOne(int thread) {
 void LaneWorkers::waitFor(std::size_t b) {
   const long generation = active_generation_.load(std::memory_order_relaxed);
   while (done_[b].load(std::memory_order_acquire) != generation)
-    if (!runOne(0)) std::this_thread::yield();  // a helper is on it
+    if (!runOne()) std::this_thread::yield();  // a helper is on it
 }
 
 void LaneWorkers::finish() {
-  while (runOne(0)) {
+  while (runOne()) {
   }
   const long generation = active_generation_.load(std::memory_order_relaxed);
   for (std::size_t b = 0; b < blocks_; ++b)
@@ -56,7 +57,7 @@ void LaneWorkers::finish() {
   while (busy_.load(std::memory_order_acquire) != 0) std::this_thread::yield();
 }
 
-void LaneWorkers::loop(int thread) {
+void LaneWorkers::loop() {
   long seen = 0;
   for (;;) {
     {
@@ -65,7 +66,7 @@ void LaneWorkers::loop(int thread) {
       if (quit_) return;
       seen = generation_;
     }
-    while (runOne(thread)) {
+    while (runOne()) {
     }
     busy_.fetch_sub(1, std::memory_order_acq_rel);
   }

@@ -7,7 +7,6 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
-#include <functional>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -26,18 +25,18 @@ class LaneWorkers {
 
   int helpers() const { return static_cast<int>(threads_.size()); }
 
-  /// Starts a substep of `blocks` blocks: run(block, thread) computes one (thread 0 is the caller, 1.. the
-  /// helpers: an index for per-thread scratch). `run` must stay valid until finish().
-  void start(std::size_t blocks, std::function<void(std::size_t, int)> run);
+  /// Starts a substep of `blocks` blocks: run(context, block) computes one, on any thread (a plain function
+  /// and its context: nothing is allocated per substep). `context` must stay valid until finish().
+  void start(std::size_t blocks, void (*run)(void* context, std::size_t block), void* context);
   /// Returns once block b is computed, computing unclaimed blocks on the calling thread meanwhile.
   void waitFor(std::size_t b);
   /// Returns once every block is computed and every helper is idle again.
   void finish();
 
  private:
-  void loop(int thread);
+  void loop();
   /// Claims and computes the next block; false when none is left.
-  bool runOne(int thread);
+  bool runOne();
 
   std::vector<std::thread> threads_;
   std::mutex mutex_;
@@ -45,7 +44,8 @@ class LaneWorkers {
   bool quit_ = false;
   long generation_ = 0;                     ///< substeps started (guarded by mutex_ for the helpers' wake-up)
   std::atomic<long> active_generation_{0};  ///< the substep whose blocks are handed out
-  std::function<void(std::size_t, int)> run_;
+  void (*run_)(void*, std::size_t) = nullptr;
+  void* context_ = nullptr;
   std::size_t blocks_ = 0;
   std::atomic<std::size_t> next_{0};
   std::unique_ptr<std::atomic<long>[]> done_;  ///< per block: the generation in which it was computed

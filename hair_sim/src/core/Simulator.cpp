@@ -243,7 +243,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   const std::size_t blocks = block_rows_.size();
   // One block of chains: reads only its own chains' state at the start of the substep, writes only their
   // new state and its flags (on any thread).
-  auto runBlock = [&](std::size_t blk, int) {
+  auto runBlock = [&](std::size_t blk) {
     if (block_margin_[blk] < 0) return;
     lanes::BlockJob j = job;
     j.rows = block_rows_[blk];
@@ -287,9 +287,10 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     }
   } finish_helpers{workers};
   if (workers) {
-    workers->start(blocks, runBlock);
+    workers->start(
+        blocks, [](void* run, std::size_t blk) { (*static_cast<decltype(runBlock)*>(run))(blk); }, &runBlock);
   } else {
-    for (std::size_t blk = 0; blk < blocks; ++blk) runBlock(blk, 0);
+    for (std::size_t blk = 0; blk < blocks; ++blk) runBlock(blk);
   }
 
   // In strip order, as the exact step goes: a strip is committed from the lanes when the spring band holds
