@@ -541,8 +541,8 @@ void HairSimNode::update(bool from_tf) {
     const Iso3 held = head_.state().pose;
     int held_steps = 0;
     const ros::WallTime held_start = ros::WallTime::now();
-    while (gridTime(sim_step_ + 1, dt) <= hold_until && held_steps < max_substeps_per_update_) {
-      const ros::Time t = gridTime(sim_step_ + 1, dt);
+    for (ros::Time t = gridTime(sim_step_ + 1, dt); t <= hold_until && held_steps < max_substeps_per_update_;
+         t = gridTime(sim_step_ + 1, dt)) {
       stepTo(t, head_.update(held, dt), last_body_frames_);  // bodies on the head are held with it
       ++sim_step_;
       sim_time_ = t;
@@ -566,7 +566,7 @@ void HairSimNode::update(bool from_tf) {
   const ros::WallTime wall_start = ros::WallTime::now();
   int steps = 0;
   std::vector<Iso3> frames(config_.bodies.size(), Iso3::Identity());
-  while (gridTime(sim_step_ + 1, dt) <= target) {
+  for (ros::Time t = gridTime(sim_step_ + 1, dt); t <= target; t = gridTime(sim_step_ + 1, dt)) {
     if (steps == max_substeps_per_update_) {
       ROS_WARN_THROTTLE(5.0,
                         "hair_sim: %.3f s behind the head pose; skipping ahead (max_substeps_per_update %d)",
@@ -579,7 +579,6 @@ void HairSimNode::update(bool from_tf) {
       break;
     }
     applyLiveSettings();
-    const ros::Time t = gridTime(sim_step_ + 1, dt);
     Iso3 pose;
     if (!lookupPose(config_.head_frame, t, pose)) break;
     bool frames_ok = true;
