@@ -68,5 +68,46 @@ TEST(HairMessagesTest, ReusedMessagesEqualFreshOnes) {
   EXPECT_EQ(s.xyz[8], static_cast<float>(p.z()));
 }
 
+/// The bytes roscpp sends for a message (its serialisation, without the length prefix).
+template <typename M>
+std::vector<std::uint8_t> bytesOf(const M& message) {
+  const ros::SerializedMessage serialized = ros::serialization::serializeMessage(message);
+  return std::vector<std::uint8_t>(serialized.message_start, serialized.buf.get() + serialized.num_bytes);
+}
+
+TEST(HairMessagesTest, MarkersViewSendsTheBytesOfTheMarkerArray) {
+  Fixture f;
+  // A bent hairstyle (the meshes of a violent shake) and every mode, the view reused across modes.
+  std::vector<Vec3> world;
+  StepInputs in;
+  in.body_frames.assign(f.config.bodies.size(), Iso3::Identity());
+  for (int k = 0; k < 60; ++k) {
+    in.head.angular_velocity = Vec3(0.0, 0.0, 12.0 * std::sin(0.3 * k));
+    in.wind = Vec3(3.0, 1.0, 0.0);
+    f.sim.step(in);
+  }
+  f.sim.positionsWorld(Iso3::Identity(), world);
+  f.meshes.build(world, f.sim.stripOffsets(), f.sim.hairstyle().scalp);
+  HairMarkersView view;
+  for (RenderMode mode : {RenderMode::Both, RenderMode::Mesh, RenderMode::Strands, RenderMode::Both}) {
+    const ros::Time stamp(1234.5678);
+    const visualization_msgs::MarkerArray reference = makeHairMarkers(f.meshes, mode, 6, "odom", stamp);
+    view.update(f.meshes, mode, 6, "odom", stamp);
+    const std::vector<std::uint8_t> expected = bytesOf(reference);
+    EXPECT_EQ(view.serializedLength(), expected.size());
+    EXPECT_TRUE(bytesOf(view) == expected) << "mode " << static_cast<int>(mode);
+    // What a subscriber gets back is the MarkerArray.
+    const std::vector<std::uint8_t> sent = bytesOf(view);
+    visualization_msgs::MarkerArray received;
+    ros::serialization::IStream in_stream(const_cast<std::uint8_t*>(sent.data()),
+                                          static_cast<std::uint32_t>(sent.size()));
+    ros::serialization::deserialize(in_stream, received);
+    EXPECT_EQ(received, reference);
+  }
+  EXPECT_STREQ(ros::message_traits::md5sum(view),
+               ros::message_traits::md5sum<visualization_msgs::MarkerArray>());
+  EXPECT_STREQ(ros::message_traits::datatype(view), "visualization_msgs/MarkerArray");
+}
+
 }  // namespace
 }  // namespace hair_sim

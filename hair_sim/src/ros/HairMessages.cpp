@@ -2,10 +2,39 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace hair_sim {
 
 namespace {
+
+/// hair_markers' alpha: the coverage of the two coincident layers the markers used to carry (see
+/// fillHairMarkers).
+inline float twoLayerAlpha(float a) { return a * (2.f - a); }
+
+/// A hair_markers marker's fields but its points and colours: ns "hair" TRIANGLE_LIST or ns "strands"
+/// LINE_LIST (1.5 mm lines).
+void markerShell(visualization_msgs::Marker& m, bool strands, const std::string& frame,
+                 const ros::Time& stamp) {
+  m.header.stamp = stamp;
+  m.header.frame_id = frame;
+  m.ns = strands ? "strands" : "hair";
+  m.id = 0;
+  m.type = strands ? visualization_msgs::Marker::LINE_LIST : visualization_msgs::Marker::TRIANGLE_LIST;
+  m.action = visualization_msgs::Marker::ADD;
+  m.pose = geometry_msgs::Pose();
+  m.pose.orientation.w = 1.0;
+  m.scale.x = strands ? 0.0015 : 1.0;  // a LINE_LIST's line width (m)
+  m.scale.y = m.scale.z = 1.0;
+  m.color.r = m.color.g = m.color.b = m.color.a = 1.0f;
+}
+
+/// Every strip's strand lines (LINE_LIST point pairs) with their colours, appended.
+void allStrandLines(const HairMeshBuilder& meshes, int strands_per_strip, std::vector<Vec3>& points,
+                    std::vector<Rgba>& colours) {
+  for (std::size_t s = 0; s < meshes.meshes().size(); ++s)
+    HairLook::strandLines(meshes.meshes()[s], strands_per_strip, points, &meshes.colours()[s], &colours);
+}
 
 std_msgs::ColorRGBA toColor(const Rgba& c) {
   std_msgs::ColorRGBA q;
@@ -64,16 +93,6 @@ void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands
                      visualization_msgs::MarkerArray& array) {
   const std::size_t count = mode == RenderMode::Both ? 2 : 1;
   array.markers.resize(count);
-  for (visualization_msgs::Marker& m : array.markers) {
-    m.header.stamp = stamp;
-    m.header.frame_id = frame;
-    m.pose = geometry_msgs::Pose();
-    m.pose.orientation.w = 1.0;
-    m.scale.x = m.scale.y = m.scale.z = 1.0;
-    m.color.r = m.color.g = m.color.b = m.color.a = 1.0f;
-    m.action = visualization_msgs::Marker::ADD;
-    m.id = 0;
-  }
   std::size_t next = 0;
   if (mode != RenderMode::Strands) {
     // One merged TRIANGLE_LIST: every strip, one winding, per-vertex RGBA. rviz 1.14's TriangleListMarker
@@ -84,8 +103,7 @@ void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands
     // One winding with that alpha looks the same (exactly at the vertices; between them rviz interpolates
     // alpha linearly, which differs by at most (da)^2 / 4 along an edge whose ends differ by da).
     visualization_msgs::Marker& m = array.markers[next++];
-    m.ns = "hair";
-    m.type = visualization_msgs::Marker::TRIANGLE_LIST;
+    markerShell(m, false, frame, stamp);
     std::size_t total = 0;
     for (const StripMesh& mesh : meshes.meshes()) total += 3 * static_cast<std::size_t>(mesh.triangleCount());
     // Resized in place: a reused message keeps its buffers (no allocation, no page faults).
@@ -110,26 +128,128 @@ void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands
         colour->r = c.r;
         colour->g = c.g;
         colour->b = c.b;
-        colour->a = c.a * (2.f - c.a);  // the coverage of the former two coincident layers (above)
+        colour->a = twoLayerAlpha(c.a);
         ++colour;
       }
     }
   }
   if (mode != RenderMode::Mesh) {
     visualization_msgs::Marker& m = array.markers[next++];
-    m.ns = "strands";
-    m.type = visualization_msgs::Marker::LINE_LIST;
-    m.scale.x = 0.0015;  // line width (m)
+    markerShell(m, true, frame, stamp);
     std::vector<Vec3> points;
     std::vector<Rgba> colours;
-    for (std::size_t s = 0; s < meshes.meshes().size(); ++s)
-      HairLook::strandLines(meshes.meshes()[s], strands_per_strip, points, &meshes.colours()[s], &colours);
+    allStrandLines(meshes, strands_per_strip, points, colours);
     m.points.resize(points.size());
     m.colors.resize(points.size());
     for (std::size_t k = 0; k < points.size(); ++k) {
       m.points[k] = toPoint(points[k]);
       m.colors[k] = toColor(colours[k]);
     }
+  }
+}
+
+void HairMarkersView::update(const HairMeshBuilder& meshes, RenderMode mode, int strands_per_strip,
+                             const std::string& frame, const ros::Time& stamp) {
+  meshes_ = &meshes;
+  mesh_ = mode != RenderMode::Strands;
+  strands_ = mode != RenderMode::Mesh;
+  mesh_vertices_ = 0;
+  if (mesh_) {
+    markerShell(mesh_shell_, false, frame, stamp);
+    for (const StripMesh& mesh : meshes.meshes())
+      mesh_vertices_ += 3 * static_cast<std::uint32_t>(mesh.triangleCount());
+  }
+  strand_points_.clear();
+  strand_colours_.clear();
+  if (strands_) {
+    markerShell(strands_shell_, true, frame, stamp);
+    allStrandLines(meshes, strands_per_strip, strand_points_, strand_colours_);
+  }
+}
+
+std::uint32_t HairMarkersView::serializedLength() const {
+  namespace ser = ros::serialization;
+  // A shell serialises its empty points and colours as two lengths; each point is 3 float64, each colour
+  // 4 float32.
+  std::uint32_t length = 4;  // the markers' count
+  if (mesh_) length += ser::serializationLength(mesh_shell_) + (24 + 16) * mesh_vertices_;
+  if (strands_) {
+    length += ser::serializationLength(strands_shell_) +
+              (24 + 16) * static_cast<std::uint32_t>(strand_points_.size());
+  }
+  return length;
+}
+
+namespace {
+
+static_assert(sizeof(Vec3) == 24 && sizeof(Rgba) == 16,
+              "Vec3 is three float64 and Rgba four float32, packed");
+
+/// A marker as visualization_msgs::Marker's serializer writes it (fields in the order of its allInOne),
+/// with `count` points and colours left for `fill(points, colours)` to write in place: 3 float64 and
+/// 4 float32 each (little endian, as ROS serialises them on this host).
+template <typename Fill>
+void writeMarker(ros::serialization::OStream& stream, const visualization_msgs::Marker& shell,
+                 std::uint32_t count, Fill fill) {
+  stream.next(shell.header);
+  stream.next(shell.ns);
+  stream.next(shell.id);
+  stream.next(shell.type);
+  stream.next(shell.action);
+  stream.next(shell.pose);
+  stream.next(shell.scale);
+  stream.next(shell.color);
+  stream.next(shell.lifetime);
+  stream.next(shell.frame_locked);
+  stream.next(count);
+  std::uint8_t* points = stream.advance(24 * count);
+  stream.next(count);
+  std::uint8_t* colours = stream.advance(16 * count);
+  fill(points, colours);
+  stream.next(shell.text);
+  stream.next(shell.mesh_resource);
+  stream.next(shell.mesh_use_embedded_materials);
+}
+
+/// One vertex: position, and colour with `alpha`.
+inline void writeVertex(const Vec3& p, const Rgba& c, float alpha, std::uint8_t*& points,
+                        std::uint8_t*& colours) {
+  std::memcpy(points, p.data(), 24);
+  points += 24;
+  const float rgba[4] = {c.r, c.g, c.b, alpha};
+  std::memcpy(colours, rgba, 16);
+  colours += 16;
+}
+
+}  // namespace
+
+void HairMarkersView::write(ros::serialization::OStream& stream) const {
+  stream.next(static_cast<std::uint32_t>((mesh_ ? 1 : 0) + (strands_ ? 1 : 0)));
+  if (mesh_) {
+    writeMarker(stream, mesh_shell_, mesh_vertices_, [this](std::uint8_t* points, std::uint8_t* colours) {
+      std::vector<std::uint32_t> indices;  // one strip's triangles, built again only for a new grid size
+      int n_u = -1, n_v = -1;
+      for (std::size_t s = 0; s < meshes_->meshes().size(); ++s) {
+        const StripMesh& mesh = meshes_->meshes()[s];
+        if (mesh.n_u != n_u || mesh.n_v != n_v) {
+          indices.clear();
+          Tessellator::appendTriangles(mesh, 0, false, indices);
+          n_u = mesh.n_u;
+          n_v = mesh.n_v;
+        }
+        const Vec3* positions = mesh.positions.data();
+        const Rgba* colours_in = meshes_->colours()[s].data();
+        for (std::uint32_t k : indices)
+          writeVertex(positions[k], colours_in[k], twoLayerAlpha(colours_in[k].a), points, colours);
+      }
+    });
+  }
+  if (strands_) {
+    writeMarker(stream, strands_shell_, static_cast<std::uint32_t>(strand_points_.size()),
+                [this](std::uint8_t* points, std::uint8_t* colours) {
+                  for (std::size_t k = 0; k < strand_points_.size(); ++k)
+                    writeVertex(strand_points_[k], strand_colours_[k], strand_colours_[k].a, points, colours);
+                });
   }
 }
 

@@ -665,9 +665,10 @@ void HairSimNode::update(bool from_tf) {
 void HairSimNode::publishOutputs(const ros::Time& stamp, const Iso3& pose,
                                  const std::vector<Iso3>& body_frames) {
   simulator_->positionsWorld(pose, world_points_);
-  // Shared pointers: zero-copy to subscribers in the same process (a nodelet manager), which keep the
-  // message; roscpp serialises for the others within publish() and keeps no reference. A message that
-  // only this node still holds is filled again in place (its buffers already have the size).
+  // hair_state as a shared pointer: zero-copy to subscribers in the same process (a nodelet manager), which
+  // keep the message; roscpp serialises for the others within publish() and keeps no reference. A message
+  // that only this node still holds is filled again in place (its buffers already have the size).
+  // hair_markers (768 kB by default) is written from the meshes straight into the serialised message.
   if (state_pub_.getNumSubscribers() > 0) {
     if (!state_msg_ || !state_msg_.unique()) state_msg_ = boost::make_shared<hair_sim_msgs::HairState>();
     fillHairState(*simulator_, world_points_, config_.world_frame, stamp, *state_msg_);
@@ -679,10 +680,8 @@ void HairSimNode::publishOutputs(const ros::Time& stamp, const Iso3& pose,
     bodies_scratch_.push_back(config_.bodies[b].shape.transformed(body_frames[b]));
   meshes_->build(world_points_, simulator_->stripOffsets(), simulator_->hairstyle().scalp.transformed(pose),
                  bodies_scratch_);
-  if (!markers_msg_ || !markers_msg_.unique())
-    markers_msg_ = boost::make_shared<visualization_msgs::MarkerArray>();
-  fillHairMarkers(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp, *markers_msg_);
-  markers_pub_.publish(markers_msg_);
+  markers_view_.update(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp);
+  markers_pub_.publish(markers_view_);
 }
 
 void HairSimNode::publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames) {

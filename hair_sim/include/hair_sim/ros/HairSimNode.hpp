@@ -121,9 +121,10 @@ class HairSimNode {
   std::vector<Iso3> published_body_frames_;
   std::vector<Vec3> world_points_;
   std::vector<Ellipsoid> bodies_scratch_;  ///< the bodies in the world frame for the mesh (publishOutputs)
-  /// The last messages published; filled again in place when no subscriber in this process still holds them.
-  boost::shared_ptr<visualization_msgs::MarkerArray> markers_msg_;
+  /// The last hair_state published; filled again in place when no subscriber in this process still holds it.
   boost::shared_ptr<hair_sim_msgs::HairState> state_msg_;
+  /// hair_markers, serialised straight from meshes_ within publish().
+  HairMarkersView markers_view_;
 
   // Wind: blends from wind_from_ to wind_to_ over [wind_start_, wind_start_ + wind_ramp_] (sim seconds).
   Vec3 wind_from_ = Vec3::Zero();
