@@ -83,6 +83,27 @@ void checkMesh(const StripMesh& mesh, const char* where) {
   }
 }
 
+/// sin of the angle whose cosine is `cosine` (|cosine| <= 1 up to rounding): sqrt(max(0, 1 - cosine^2)).
+inline double sine(double cosine) { return std::sqrt(std::max(0.0, 1.0 - cosine * cosine)); }
+
+/// The Kajiya-Kay specular term from T.L, T.V and sin(T, L) (see HairLook::specular).
+inline double specularFrom(double tl, double tv, double sin_l, double exponent) {
+  const double cosine = std::min(1.0, sin_l * sine(tv) - tl * tv);
+  if (!(cosine > 0.0)) return 0.0;
+  // An integer exponent (the default 40) by repeated squaring: a few multiplications, within a few ulp of
+  // std::pow, which took 9 % of hair_sim_node's time with hair_markers subscribed (every vertex, every
+  // frame).
+  if (exponent <= 1024.0 && exponent == std::floor(exponent)) {
+    double result = 1.0, power = cosine;
+    for (unsigned n = static_cast<unsigned>(exponent); n != 0; n >>= 1) {
+      if (n & 1u) result *= power;
+      power *= power;
+    }
+    return result;
+  }
+  return std::pow(cosine, exponent);
+}
+
 }  // namespace
 
 HairLook::HairLook(const HairLookParameters& parameters) : parameters_(parameters) {
@@ -101,30 +122,12 @@ HairLook::HairLook(const HairLookParameters& parameters) : parameters_(parameter
   checkRange(parameters.ambient, 0.0, 1.0, true, "ambient");
 }
 
-double HairLook::diffuse(const Vec3& tangent, const Vec3& light) {
-  const double cosine = tangent.dot(light);
-  return std::sqrt(std::max(0.0, 1.0 - cosine * cosine));
-}
+double HairLook::diffuse(const Vec3& tangent, const Vec3& light) { return sine(tangent.dot(light)); }
 
 double HairLook::specular(const Vec3& tangent, const Vec3& light, const Vec3& view, double exponent) {
   const double tl = tangent.dot(light);
   const double tv = tangent.dot(view);
-  const double sin_l = std::sqrt(std::max(0.0, 1.0 - tl * tl));
-  const double sin_v = std::sqrt(std::max(0.0, 1.0 - tv * tv));
-  const double cosine = std::min(1.0, sin_l * sin_v - tl * tv);
-  if (!(cosine > 0.0)) return 0.0;
-  // An integer exponent (the default 40) by repeated squaring: a few multiplications, within a few ulp of
-  // std::pow, which took 9 % of hair_sim_node's time with hair_markers subscribed (every vertex, every
-  // frame).
-  if (exponent <= 1024.0 && exponent == std::floor(exponent)) {
-    double result = 1.0, power = cosine;
-    for (unsigned n = static_cast<unsigned>(exponent); n != 0; n >>= 1) {
-      if (n & 1u) result *= power;
-      power *= power;
-    }
-    return result;
-  }
-  return std::pow(cosine, exponent);
+  return specularFrom(tl, tv, sine(tl), exponent);
 }
 
 double HairLook::stripeProfile(double u, std::uint32_t strip_seed, double width) const {
@@ -201,10 +204,13 @@ void HairLook::colour(const StripMesh& mesh, const Rgba& base, std::uint32_t str
       const std::size_t index = static_cast<std::size_t>(mesh.index(iu, iv));
       const Vec3& tangent = mesh.tangents[index];
       const double v = mesh.v_param[index];
-      const double light = ambient + (1.0 - ambient) * diffuse(tangent, light_);
+      // diffuse() and specular() inline, sharing sin(T, L).
+      const double tl = tangent.dot(light_);
+      const double sin_l = sine(tl);
+      const double light = ambient + (1.0 - ambient) * sin_l;
       const double shade = light * stripe_brightness * rootFactor(v);
-      const double highlight =
-          parameters_.specular_strength * specular(tangent, light_, view_, parameters_.specular_exponent);
+      const double highlight = parameters_.specular_strength *
+                               specularFrom(tl, tangent.dot(view_), sin_l, parameters_.specular_exponent);
       Rgba& out = colours[index];
       out.r = clampChannel(base_r * shade + highlight);
       out.g = clampChannel(base_g * shade + highlight);
