@@ -45,9 +45,16 @@ def main():
     for name in ('BM_Tessellate_CachedBasis', 'BM_Tessellate_ForwardDifferencing', 'BM_Tessellate_DeBoor'):
         if name in bench:
             lines.append('| %s | %.1f |' % (name.replace('BM_Tessellate_', ''), 1e9 / bench[name]['items_per_second']))
-    if 'BM_MeshBuild' in bench:  # the node's whole mesh per frame: tessellation, scalp, bodies, look
-        lines.append('| the node\'s mesh per frame (BM_MeshBuild: CachedBasis + scalp + bodies + look) | %.1f |'
-                     % (1e9 / bench['BM_MeshBuild']['items_per_second']))
+    # The node's whole mesh per frame (tessellation, scalp, bodies, look): BM_MeshBuild/<strips>/<threads>,
+    # wall time.
+    mesh = {tuple(n.split('/')[1:3]): 1e9 / bench[n]['items_per_second'] for n in bench
+            if n.startswith('BM_MeshBuild/')}
+    if ('100', '1') in mesh:
+        lines.append('| the node\'s mesh per frame (BM_MeshBuild/100: CachedBasis + scalp + bodies + look) | %.1f |'
+                     % mesh[('100', '1')])
+    if ('1000', '1') in mesh and ('1000', '2') in mesh:
+        lines.append('| the mesh at 1,000 strips, 1 / 2 threads (wall time; speed-up) | %.1f / %.1f (%.2f x) |' % (
+            mesh[('1000', '1')], mesh[('1000', '2')], mesh[('1000', '1')] / mesh[('1000', '2')]))
     if node and 'error' not in node:
         lines += ['', '| node (default hairstyle, 30 Hz, markers subscribed) | value |', '|---|---|',
                   '| CPU share of one core | %.1f %% |' % (100.0 * node['cpu_share']),

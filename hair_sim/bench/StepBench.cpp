@@ -87,15 +87,16 @@ BENCHMARK(BM_StepBaseline)->Arg(1000)->Unit(benchmark::kMillisecond);
 void BM_Step2Threads(benchmark::State& state) { runStep(state, Simulator::StepPath::Lanes, 2); }
 BENCHMARK(BM_Step2Threads)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-/// BM_MeshBuild: what hair_sim_node does for hair_markers each frame before filling the message, on the
-/// default config's 100 strips after 1 s of BM_Step's motion (hair lying on the bodies):
+/// BM_MeshBuild/<strips>/<threads>: what hair_sim_node does for hair_markers each frame before writing the
+/// message, on the default config's bodies and a generated hairstyle after 1 s of BM_Step's motion (hair
+/// lying on the bodies):
 /// HairMeshBuilder::build at the default level of detail (tessellation, root edge onto the scalp, vertices
-/// out of the 5 bodies, the look); items = vertices.
+/// out of the 5 bodies, the look); items = vertices; threads: HairMeshBuilder::setThreads (wall time).
 void BM_MeshBuild(benchmark::State& state) {
   const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
   Iso3 rest = Iso3::Identity();
   rest.translation() = Vec3(0.0, 0.0, 1.6);
-  const Hairstyle style = benchHairstyle(config, 100);
+  const Hairstyle style = benchHairstyle(config, static_cast<int>(state.range(0)));
   Simulator sim(style, config.physics, config.bodies);
   HeadMotionEstimator head;
   head.reset(rest);
@@ -113,6 +114,7 @@ void BM_MeshBuild(benchmark::State& state) {
   for (std::size_t b = 0; b < config.bodies.size(); ++b)
     bodies.push_back(config.bodies[b].shape.transformed(frames[b]));
   HairMeshBuilder builder(sim.hairstyle(), HairMeshOptions{});
+  builder.setThreads(static_cast<int>(state.range(1)));
   const Ellipsoid scalp = sim.hairstyle().scalp.transformed(pose);
   for (auto _ : state) {
     builder.build(points, sim.stripOffsets(), scalp, bodies);
@@ -123,6 +125,11 @@ void BM_MeshBuild(benchmark::State& state) {
   state.counters["vertices"] = builder.vertexCount();
   state.counters["projected"] = builder.projectedVertices();
 }
-BENCHMARK(BM_MeshBuild)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MeshBuild)
+    ->Args({100, 1})
+    ->Args({1000, 1})
+    ->Args({1000, 2})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
 
 }  // namespace

@@ -3,7 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
 #include "TestUtil.hpp"
+#include "hair_sim/core/model/HairstyleGenerator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
 #include "hair_sim/tools/OfflineRunner.hpp"
@@ -84,6 +90,75 @@ TEST(HairMeshBuilderTest, ViolentShakeLeavesNoMeshVertexInsideABody) {
   const RunSummary summary = runner.run(nullptr, options);
   EXPECT_GT(summary.mesh_vertices_projected, 0) << "the shake must push the spline surface onto the bodies";
   EXPECT_LE(summary.max_mesh_penetration_m, 1e-3);
+}
+
+/// Every output of a build: meshes (positions, frames, parameters) and colours, bytes compared.
+bool sameBuild(const HairMeshBuilder& a, const HairMeshBuilder& b) {
+  if (a.meshes().size() != b.meshes().size() || a.projectedVertices() != b.projectedVertices()) return false;
+  auto same = [](const auto& x, const auto& y) {
+    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0;
+  };
+  for (std::size_t s = 0; s < a.meshes().size(); ++s) {
+    const StripMesh& m = a.meshes()[s];
+    const StripMesh& n = b.meshes()[s];
+    if (m.n_u != n.n_u || m.n_v != n.n_v || !same(m.positions, n.positions) || !same(m.normals, n.normals) ||
+        !same(m.tangents, n.tangents) || !same(m.v_param, n.v_param) || !same(m.u_param, n.u_param) ||
+        !same(a.colours()[s], b.colours()[s]))
+      return false;
+  }
+  return true;
+}
+
+TEST(HairMeshBuilderTest, HelperThreadsBuildTheSameMeshes) {
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  GeneratorOptions generated;
+  generated.strips = 300;  // about 19 blocks of 16 strips
+  const Hairstyle style = generateHairstyle(config, Iso3::Identity(), generated);
+  ASSERT_GE(style.strips.size(), static_cast<std::size_t>(HairMeshBuilder::kMinStripsForHelpers));
+  Simulator sim(style, config.physics, config.bodies);
+  StepInputs in;
+  in.body_frames.assign(config.bodies.size(), Iso3::Identity());
+  in.wind = Vec3(6.0, -4.0, 2.0);
+  for (int k = 0; k < 120; ++k) sim.step(in);
+  // A body just outside the scalp: the surface between the control points dips into it, so vertices are
+  // moved out of it on every thread.
+  const Ellipsoid& scalp = sim.hairstyle().scalp;
+  const std::vector<Ellipsoid> bodies{Ellipsoid(scalp.center(), scalp.rotation(), scalp.radii() * 1.06)};
+  HairMeshBuilder one(sim.hairstyle(), HairMeshOptions());
+  one.build(sim.positionsHead(), sim.stripOffsets(), scalp, bodies);
+  EXPECT_GT(one.projectedVertices(), 100);
+  EXPECT_EQ(one.threads(), 1);
+  for (int threads : {2, 3, 1}) {
+    HairMeshBuilder many(sim.hairstyle(), HairMeshOptions());
+    many.setThreads(threads);
+    EXPECT_EQ(many.threads(), threads);
+    for (int repeat = 0; repeat < 3; ++repeat) {  // reused blocks and tessellators
+      many.build(sim.positionsHead(), sim.stripOffsets(), scalp, bodies);
+      EXPECT_TRUE(sameBuild(one, many)) << threads << " threads, build " << repeat;
+    }
+  }
+  HairMeshBuilder builder(sim.hairstyle(), HairMeshOptions());
+  for (int bad : {0, -1, 65}) {
+    try {
+      builder.setThreads(bad);
+      ADD_FAILURE() << "setThreads(" << bad << ") accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("got " + std::to_string(bad)), std::string::npos) << e.what();
+    }
+  }
+  // A strip that cannot be tessellated (a non-finite control point in block 10) throws on the calling
+  // thread, naming the point, with helpers as without.
+  std::vector<Vec3> broken = sim.positionsHead();
+  broken[static_cast<std::size_t>(sim.stripOffsets()[170] + 3)].x() = std::nan("");
+  for (int threads : {1, 2}) {
+    builder.setThreads(threads);
+    try {
+      builder.build(broken, sim.stripOffsets(), scalp, bodies);
+      ADD_FAILURE() << "a NaN control point was tessellated with " << threads << " threads";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("control point 3"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

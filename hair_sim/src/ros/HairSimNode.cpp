@@ -170,7 +170,12 @@ void HairSimNode::readParameters() {
 void HairSimNode::rebuild(Hairstyle hairstyle) {
   simulator_ = std::make_unique<Simulator>(std::move(hairstyle), config_.physics, config_.bodies);
   simulator_->setThreads(threads_);
+  makeMeshBuilder();
+}
+
+void HairSimNode::makeMeshBuilder() {
   meshes_ = std::make_unique<HairMeshBuilder>(simulator_->hairstyle(), mesh_options_);
+  meshes_->setThreads(threads_);
 }
 
 bool HairSimNode::lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose, ros::Time* found) {
@@ -738,7 +743,7 @@ void HairSimNode::applyLiveSettings() {
       s.mesh.level_of_detail.samples_along != mesh_options_.level_of_detail.samples_along ||
       s.mesh.max_triangles != mesh_options_.max_triangles) {
     mesh_options_ = s.mesh;
-    meshes_ = std::make_unique<HairMeshBuilder>(simulator_->hairstyle(), mesh_options_);
+    makeMeshBuilder();
   }
 }
 

@@ -38,6 +38,8 @@ class HairSimNode {
  private:
   void readParameters();
   void rebuild(Hairstyle hairstyle);
+  /// meshes_ for the simulator's hairstyle with mesh_options_ and threads_.
+  void makeMeshBuilder();
   void onTimer(const ros::TimerEvent& event);
   /// /tf and /tf_static into the buffer (what tf2_ros::TransformListener does), then update(): the hair
   /// steps as soon as a new head pose is in, and is published then if an output is due.

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
+
+#include "../LaneWorkers.hpp"
 
 namespace hair_sim {
 
@@ -15,19 +18,38 @@ LevelOfDetail chooseLevel(const Hairstyle& style, const HairMeshOptions& o) {
 }  // namespace
 
 HairMeshBuilder::HairMeshBuilder(const Hairstyle& hairstyle, const HairMeshOptions& options)
-    : hairstyle_(hairstyle),
-      tessellator_(chooseLevel(hairstyle, options), options.method),
-      look_(options.look) {
+    : hairstyle_(hairstyle), level_of_detail_(chooseLevel(hairstyle, options)), look_(options.look) {
+  tessellators_.emplace_back(level_of_detail_, options.method);
   meshes_.resize(hairstyle_.strips.size());
   colours_.resize(hairstyle_.strips.size());
 }
 
+HairMeshBuilder::~HairMeshBuilder() = default;
+
+void HairMeshBuilder::setThreads(int threads) {
+  if (threads < 1 || threads > 64)
+    throw std::invalid_argument("HairMeshBuilder::setThreads(...) : threads must be in [1, 64], got " +
+                                std::to_string(threads));
+  workers_.reset();
+  if (threads > 1) workers_.reset(new LaneWorkers(threads - 1));
+}
+
+int HairMeshBuilder::threads() const { return workers_ ? workers_->helpers() + 1 : 1; }
+
 void HairMeshBuilder::build(const std::vector<Vec3>& points, const std::vector<int>& strip_offsets,
                             const Ellipsoid& scalp, const std::vector<Ellipsoid>& bodies) {
   projected_ = 0;
-  if (strip_offsets.size() != hairstyle_.strips.size())
+  const std::size_t strips = hairstyle_.strips.size();
+  if (strip_offsets.size() != strips)
     throw std::invalid_argument("HairMeshBuilder::build(...) : " + std::to_string(strip_offsets.size()) +
-                                " strip offsets for " + std::to_string(hairstyle_.strips.size()) + " strips");
+                                " strip offsets for " + std::to_string(strips) + " strips");
+  for (std::size_t s = 0; s < strips; ++s) {
+    const std::size_t first = static_cast<std::size_t>(strip_offsets[s]);
+    if (strip_offsets[s] < 0 ||
+        first + static_cast<std::size_t>(hairstyle_.strips[s].pointCount()) > points.size())
+      throw std::invalid_argument("HairMeshBuilder::build(...) : too few points for strip " +
+                                  std::to_string(s));
+  }
   // A vertex farther from a body's centre than its largest radius (with 1e-9 to spare) is outside it: the
   // exact test (a transform into the body's sphere space) only for the others.
   body_reach2_.clear();
@@ -35,14 +57,48 @@ void HairMeshBuilder::build(const std::vector<Vec3>& points, const std::vector<i
     const double reach = e.radii().maxCoeff() * (1.0 + 1e-9);
     body_reach2_.push_back(reach * reach);
   }
-  for (std::size_t s = 0; s < hairstyle_.strips.size(); ++s) {
+  points_ = &points;
+  strip_offsets_ = &strip_offsets;
+  scalp_ = &scalp;
+  bodies_ = &bodies;
+  if (!workers_ || strips < static_cast<std::size_t>(kMinStripsForHelpers)) {
+    buildStrips(0, strips, tessellators_.front(), projected_);
+    return;
+  }
+  const std::size_t blocks = (strips + kStripsPerBlock - 1) / kStripsPerBlock;
+  while (tessellators_.size() < blocks)
+    tessellators_.emplace_back(level_of_detail_, tessellators_.front().method());
+  block_projected_.assign(blocks, 0);
+  block_errors_.assign(blocks, nullptr);
+  workers_->start(blocks, &HairMeshBuilder::buildBlock, this);
+  workers_->finish();
+  for (std::size_t b = 0; b < blocks; ++b) {
+    if (block_errors_[b]) std::rethrow_exception(block_errors_[b]);
+    projected_ += block_projected_[b];
+  }
+}
+
+void HairMeshBuilder::buildBlock(void* context, std::size_t block) {
+  HairMeshBuilder& self = *static_cast<HairMeshBuilder*>(context);
+  const std::size_t first = block * kStripsPerBlock;
+  const std::size_t last = std::min(first + kStripsPerBlock, self.hairstyle_.strips.size());
+  try {
+    self.buildStrips(first, last, self.tessellators_[block], self.block_projected_[block]);
+  } catch (...) {  // rethrown on the calling thread
+    self.block_errors_[block] = std::current_exception();
+  }
+}
+
+void HairMeshBuilder::buildStrips(std::size_t first_strip, std::size_t last_strip, Tessellator& tessellator,
+                                  int& projected) {
+  const std::vector<Vec3>& points = *points_;
+  const Ellipsoid& scalp = *scalp_;
+  const std::vector<Ellipsoid>& bodies = *bodies_;
+  for (std::size_t s = first_strip; s < last_strip; ++s) {
     const Strip& strip = hairstyle_.strips[s];
-    const std::size_t first = static_cast<std::size_t>(strip_offsets[s]);
-    if (first + static_cast<std::size_t>(strip.pointCount()) > points.size())
-      throw std::invalid_argument("HairMeshBuilder::build(...) : too few points for strip " +
-                                  std::to_string(s));
+    const std::size_t first = static_cast<std::size_t>((*strip_offsets_)[s]);
     StripMesh& mesh = meshes_[s];
-    tessellator_.tessellate(points.data() + first, strip.columns, strip.rows, strip.hair_length, mesh);
+    tessellator.tessellate(points.data() + first, strip.columns, strip.rows, strip.hair_length, mesh);
     for (int iu = 0; iu < mesh.n_u; ++iu) {
       Vec3& p = mesh.positions[static_cast<std::size_t>(mesh.index(iu, 0))];
       p = scalp.radialProjection(p);
@@ -54,7 +110,7 @@ void HairMeshBuilder::build(const std::vector<Vec3>& points, const std::vector<i
         if ((p - e.center()).squaredNorm() > body_reach2_[b] || e.implicitValue(p) >= 0.0) continue;
         const Ellipsoid::ClosestPoint cp = e.closestPoint(p);
         p = cp.point + 1e-6 * cp.normal;
-        ++projected_;
+        ++projected;
       }
     }
     look_.colorize(mesh, strip.color, static_cast<std::uint32_t>(s * 2654435761u), colours_[s]);
