@@ -88,8 +88,9 @@ inline double sine(double cosine) { return std::sqrt(std::max(0.0, 1.0 - cosine 
 
 /// The Kajiya-Kay specular term from T.L, T.V and sin(T, L) (see HairLook::specular).
 inline double specularFrom(double tl, double tv, double sin_l, double exponent) {
-  const double cosine = std::min(1.0, sin_l * sine(tv) - tl * tv);
-  if (!(cosine > 0.0)) return 0.0;
+  const double raw = std::min(1.0, sin_l * sine(tv) - tl * tv);
+  // Back-facing highlights are 0: the power of 0 (no branch on the data; about half the vertices have it).
+  const double cosine = raw > 0.0 ? raw : 0.0;
   // An integer exponent (the default 40) by repeated squaring: a few multiplications, within a few ulp of
   // std::pow, which took 9 % of hair_sim_node's time with hair_markers subscribed (every vertex, every
   // frame).
@@ -156,10 +157,8 @@ double HairLook::stripeProfile(double u, std::uint32_t strip_seed, double width)
 }
 
 double HairLook::tipFade(double v) const {
+  // Before tip_fade_start the smoothstep's argument is clamped to 0: exactly 1 (no branch on the data).
   const double start = parameters_.tip_fade_start;
-  if (v <= start) {
-    return 1.0;
-  }
   return 1.0 - smoothstep((v - start) / (1.0 - start));
 }
 
@@ -169,15 +168,41 @@ double HairLook::rootFactor(double v) const {
 
 void HairLook::colorize(const StripMesh& mesh, const Rgba& base, std::uint32_t strip_seed,
                         std::vector<Rgba>& colours) const {
-  colour(mesh, base, strip_seed, true, colours);
+  colour(mesh, base, strip_seed, true, nullptr, colours);
+}
+
+void HairLook::stripeProfiles(const StripMesh& mesh, std::uint32_t strip_seed,
+                              std::vector<double>& profiles) const {
+  checkMesh(mesh, "HairLook::stripeProfiles(...)");
+  if (mesh.u_param.size() < static_cast<std::size_t>(mesh.n_u))
+    throw std::invalid_argument("HairLook::stripeProfiles(...) : u_param has " +
+                                std::to_string(mesh.u_param.size()) + " entries, n_u is " +
+                                std::to_string(mesh.n_u));
+  profiles.resize(static_cast<std::size_t>(mesh.n_u));
+  for (int iu = 0; iu < mesh.n_u; ++iu)
+    profiles[static_cast<std::size_t>(iu)] = columnProfile(mesh, iu, strip_seed);
+}
+
+void HairLook::colorize(const StripMesh& mesh, const Rgba& base, const std::vector<double>& profiles,
+                        std::vector<Rgba>& colours) const {
+  if (profiles.size() != static_cast<std::size_t>(std::max(mesh.n_u, 0)))
+    throw std::invalid_argument("HairLook::colorize(...) : " + std::to_string(profiles.size()) +
+                                " stripe profiles for a mesh of " + std::to_string(mesh.n_u) + " columns");
+  colour(mesh, base, 0U, true, profiles.data(), colours);
 }
 
 void HairLook::shade(const StripMesh& mesh, const Rgba& base, std::vector<Rgba>& colours) const {
-  colour(mesh, base, 0U, false, colours);
+  colour(mesh, base, 0U, false, nullptr, colours);
+}
+
+double HairLook::columnProfile(const StripMesh& mesh, int iu, std::uint32_t strip_seed) const {
+  // The vertex spacing across as the box filter's width (a mip-mapped texture's footprint).
+  return stripeProfile(mesh.u_param[static_cast<std::size_t>(iu)], strip_seed,
+                       1.0 / static_cast<double>(mesh.n_u - 1));
 }
 
 void HairLook::colour(const StripMesh& mesh, const Rgba& base, std::uint32_t strip_seed, bool pattern,
-                      std::vector<Rgba>& colours) const {
+                      const double* profiles, std::vector<Rgba>& colours) const {
   const char* where = pattern ? "HairLook::colorize(...)" : "HairLook::shade(...)";
   checkMesh(mesh, where);
   const std::size_t count = mesh.positions.size();
@@ -194,10 +219,10 @@ void HairLook::colour(const StripMesh& mesh, const Rgba& base, std::uint32_t str
   const double base_a = clampChannel(base.a);
   const double contrast = parameters_.stripe_contrast;
   const double ambient = parameters_.ambient;
-  const double footprint = 1.0 / static_cast<double>(mesh.n_u - 1);
   for (int iu = 0; iu < mesh.n_u; ++iu) {
-    const double profile =
-        pattern ? stripeProfile(mesh.u_param[static_cast<std::size_t>(iu)], strip_seed, footprint) : 1.0;
+    const double profile = !pattern              ? 1.0
+                           : profiles != nullptr ? profiles[iu]
+                                                 : columnProfile(mesh, iu, strip_seed);
     const double stripe_alpha = 1.0 - contrast * (1.0 - profile);
     const double stripe_brightness = 1.0 - 0.5 * contrast * (1.0 - profile);
     for (int iv = 0; iv < mesh.n_v; ++iv) {

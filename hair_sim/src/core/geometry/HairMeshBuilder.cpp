@@ -22,6 +22,7 @@ HairMeshBuilder::HairMeshBuilder(const Hairstyle& hairstyle, const HairMeshOptio
   tessellators_.emplace_back(level_of_detail_, options.method);
   meshes_.resize(hairstyle_.strips.size());
   colours_.resize(hairstyle_.strips.size());
+  profiles_.resize(hairstyle_.strips.size());
 }
 
 HairMeshBuilder::~HairMeshBuilder() = default;
@@ -113,7 +114,10 @@ void HairMeshBuilder::buildStrips(std::size_t first_strip, std::size_t last_stri
         ++projected;
       }
     }
-    look_.colorize(mesh, strip.color, static_cast<std::uint32_t>(s * 2654435761u), colours_[s]);
+    std::vector<double>& profiles = profiles_[s];  // the stripes depend on the seed and n_u only
+    if (profiles.size() != static_cast<std::size_t>(mesh.n_u))
+      look_.stripeProfiles(mesh, static_cast<std::uint32_t>(s * 2654435761u), profiles);
+    look_.colorize(mesh, strip.color, profiles, colours_[s]);
   }
 }
 

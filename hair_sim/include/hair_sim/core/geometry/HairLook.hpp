@@ -50,6 +50,14 @@ class HairLook {
   /// strips. Throws std::invalid_argument when the mesh arrays are inconsistent.
   void colorize(const StripMesh& mesh, const Rgba& base, std::uint32_t strip_seed,
                 std::vector<Rgba>& colours) const;
+  /// The stripe profile of every vertex column of `mesh` (at its u_param, averaged over the column spacing)
+  /// as colorize() computes it: depends on the seed and mesh.n_u only, so a caller that colours the same
+  /// strip every frame computes it once.
+  void stripeProfiles(const StripMesh& mesh, std::uint32_t strip_seed, std::vector<double>& profiles) const;
+  /// colorize() with the profiles of stripeProfiles() (same seed, same n_u): the same colours. Throws
+  /// std::invalid_argument when profiles does not have mesh.n_u entries.
+  void colorize(const StripMesh& mesh, const Rgba& base, const std::vector<double>& profiles,
+                std::vector<Rgba>& colours) const;
   /// The lighting of colorize() alone (Kajiya-Kay diffuse and specular, root darkening), no stripes and no
   /// tip fade: alpha = base.a. The vertex colours under an alpha-mapped texture that carries the strands
   /// and the tip fade (HairTexture), as the rviz display draws them. Same sizes and errors as colorize().
@@ -82,8 +90,12 @@ class HairLook {
                           std::vector<Rgba>* point_colours = nullptr);
 
  private:
+  /// stripeProfile of vertex column iu (its u_param, box-filtered over the column spacing).
+  double columnProfile(const StripMesh& mesh, int iu, std::uint32_t strip_seed) const;
+  /// pattern: stripes and tip fade, the stripe profile of column iu from profiles[iu] or, when profiles is
+  /// null, computed; otherwise (shade) neither.
   void colour(const StripMesh& mesh, const Rgba& base, std::uint32_t strip_seed, bool pattern,
-              std::vector<Rgba>& colours) const;
+              const double* profiles, std::vector<Rgba>& colours) const;
 
   HairLookParameters parameters_;
   Vec3 light_;

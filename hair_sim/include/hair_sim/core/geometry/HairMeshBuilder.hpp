@@ -70,6 +70,7 @@ class HairMeshBuilder {
   std::vector<std::exception_ptr> block_errors_;  ///< per block: what its strips threw (rethrown by build())
   std::vector<StripMesh> meshes_;
   std::vector<std::vector<Rgba>> colours_;
+  std::vector<std::vector<double>> profiles_;  ///< per strip: HairLook::stripeProfiles (computed once)
   std::vector<double> body_reach2_;  ///< per body of the last build(): (largest radius)^2, a little over
   int projected_ = 0;
   std::unique_ptr<LaneWorkers> workers_;  ///< the helper threads (setThreads), or none
