@@ -45,12 +45,16 @@ double bump(double t) {
   return s * s;
 }
 
+/// std::min(a, b) and std::max(a, b) by value (the same results), for the vectorised loops.
+inline double minOf(double a, double b) { return b < a ? b : a; }
+inline double maxOf(double a, double b) { return a < b ? b : a; }
+
 double smoothstep(double x) {
-  x = std::max(0.0, std::min(1.0, x));
+  x = maxOf(0.0, minOf(1.0, x));
   return x * x * (3.0 - 2.0 * x);
 }
 
-float clampChannel(double value) { return static_cast<float>(std::max(0.0, std::min(1.0, value))); }
+float clampChannel(double value) { return static_cast<float>(maxOf(0.0, minOf(1.0, value))); }
 
 void checkRange(double value, double low, double high, bool high_inclusive, const char* name) {
   const bool ok = std::isfinite(value) && value >= low && (high_inclusive ? value <= high : value < high);
@@ -84,25 +88,33 @@ void checkMesh(const StripMesh& mesh, const char* where) {
 }
 
 /// sin of the angle whose cosine is `cosine` (|cosine| <= 1 up to rounding): sqrt(max(0, 1 - cosine^2)).
-inline double sine(double cosine) { return std::sqrt(std::max(0.0, 1.0 - cosine * cosine)); }
+inline double sine(double cosine) { return std::sqrt(maxOf(0.0, 1.0 - cosine * cosine)); }
 
-/// The Kajiya-Kay specular term from T.L, T.V and sin(T, L) (see HairLook::specular).
-inline double specularFrom(double tl, double tv, double sin_l, double exponent) {
-  const double raw = std::min(1.0, sin_l * sine(tv) - tl * tv);
-  // Back-facing highlights are 0: the power of 0 (no branch on the data; about half the vertices have it).
-  const double cosine = raw > 0.0 ? raw : 0.0;
-  // An integer exponent (the default 40) by repeated squaring: a few multiplications, within a few ulp of
-  // std::pow, which took 9 % of hair_sim_node's time with hair_markers subscribed (every vertex, every
-  // frame).
-  if (exponent <= 1024.0 && exponent == std::floor(exponent)) {
-    double result = 1.0, power = cosine;
-    for (unsigned n = static_cast<unsigned>(exponent); n != 0; n >>= 1) {
-      if (n & 1u) result *= power;
-      power *= power;
-    }
-    return result;
+/// Vertices per chunk of HairLook::colour's vectorised loops.
+constexpr int kChunk = 64;
+
+/// The Kajiya-Kay specular term (see HairLook::specular) of m <= kChunk vertices from T.L, T.V and
+/// sin(T, L), step by step over all of them (loops the compiler vectorises). Back-facing highlights are 0:
+/// the power of 0 (no branch on the data). An integer exponent (the default 40) by repeated squaring: a few
+/// multiplications, within a few ulp of std::pow, which took 9 % of hair_sim_node's time with hair_markers
+/// subscribed (every vertex, every frame).
+void specularTerms(const double* tl, const double* tv, const double* sin_l, int m, double exponent,
+                   double* out) {
+  double power[kChunk];
+  for (int k = 0; k < m; ++k) {
+    const double raw = minOf(1.0, sin_l[k] * sine(tv[k]) - tl[k] * tv[k]);
+    power[k] = raw > 0.0 ? raw : 0.0;
   }
-  return std::pow(cosine, exponent);
+  if (exponent <= 1024.0 && exponent == std::floor(exponent)) {
+    for (int k = 0; k < m; ++k) out[k] = 1.0;
+    for (unsigned n = static_cast<unsigned>(exponent); n != 0; n >>= 1) {
+      if (n & 1u)
+        for (int k = 0; k < m; ++k) out[k] *= power[k];
+      for (int k = 0; k < m; ++k) power[k] *= power[k];
+    }
+    return;
+  }
+  for (int k = 0; k < m; ++k) out[k] = std::pow(power[k], exponent);
 }
 
 }  // namespace
@@ -128,7 +140,10 @@ double HairLook::diffuse(const Vec3& tangent, const Vec3& light) { return sine(t
 double HairLook::specular(const Vec3& tangent, const Vec3& light, const Vec3& view, double exponent) {
   const double tl = tangent.dot(light);
   const double tv = tangent.dot(view);
-  return specularFrom(tl, tv, sine(tl), exponent);
+  const double sin_l = sine(tl);
+  double term = 0.0;
+  specularTerms(&tl, &tv, &sin_l, 1, exponent, &term);
+  return term;
 }
 
 double HairLook::stripeProfile(double u, std::uint32_t strip_seed, double width) const {
@@ -225,22 +240,36 @@ void HairLook::colour(const StripMesh& mesh, const Rgba& base, std::uint32_t str
                                                  : columnProfile(mesh, iu, strip_seed);
     const double stripe_alpha = 1.0 - contrast * (1.0 - profile);
     const double stripe_brightness = 1.0 - 0.5 * contrast * (1.0 - profile);
-    for (int iv = 0; iv < mesh.n_v; ++iv) {
-      const std::size_t index = static_cast<std::size_t>(mesh.index(iu, iv));
-      const Vec3& tangent = mesh.tangents[index];
-      const double v = mesh.v_param[index];
-      // diffuse() and specular() inline, sharing sin(T, L).
-      const double tl = tangent.dot(light_);
-      const double sin_l = sine(tl);
-      const double light = ambient + (1.0 - ambient) * sin_l;
-      const double shade = light * stripe_brightness * rootFactor(v);
-      const double highlight = parameters_.specular_strength *
-                               specularFrom(tl, tangent.dot(view_), sin_l, parameters_.specular_exponent);
-      Rgba& out = colours[index];
-      out.r = clampChannel(base_r * shade + highlight);
-      out.g = clampChannel(base_g * shade + highlight);
-      out.b = clampChannel(base_b * shade + highlight);
-      out.a = clampChannel(pattern ? base_a * stripe_alpha * tipFade(v) : base_a);
+    // Chunks of a vertex column, each step of the lighting a loop over the chunk that the compiler
+    // vectorises (HairLook.cpp: -O3, no errno, no trapping math): per vertex the same operations as
+    // diffuse(), specular(), rootFactor() and tipFade().
+    for (int iv0 = 0; iv0 < mesh.n_v; iv0 += kChunk) {
+      const int m = std::min(kChunk, mesh.n_v - iv0);
+      double tl[kChunk], tv[kChunk], v[kChunk], sin_l[kChunk], highlight[kChunk];
+      float r[kChunk], g[kChunk], b[kChunk], a[kChunk];
+      for (int k = 0; k < m; ++k) {
+        const std::size_t index = static_cast<std::size_t>(mesh.index(iu, iv0 + k));
+        tl[k] = mesh.tangents[index].dot(light_);
+        tv[k] = mesh.tangents[index].dot(view_);
+        v[k] = mesh.v_param[index];
+      }
+      for (int k = 0; k < m; ++k) sin_l[k] = sine(tl[k]);
+      specularTerms(tl, tv, sin_l, m, parameters_.specular_exponent, highlight);
+      for (int k = 0; k < m; ++k) {
+        const double light = ambient + (1.0 - ambient) * sin_l[k];
+        const double shade = light * stripe_brightness * rootFactor(v[k]);
+        const double h = parameters_.specular_strength * highlight[k];
+        r[k] = clampChannel(base_r * shade + h);
+        g[k] = clampChannel(base_g * shade + h);
+        b[k] = clampChannel(base_b * shade + h);
+      }
+      if (pattern) {
+        for (int k = 0; k < m; ++k) a[k] = clampChannel(base_a * stripe_alpha * tipFade(v[k]));
+      } else {
+        for (int k = 0; k < m; ++k) a[k] = clampChannel(base_a);
+      }
+      for (int k = 0; k < m; ++k)
+        colours[static_cast<std::size_t>(mesh.index(iu, iv0 + k))] = Rgba{r[k], g[k], b[k], a[k]};
     }
   }
 }
