@@ -3,7 +3,7 @@
 # hair_sim_node, and compare its hair_state with the live run's (rosbag_compare.py).
 #   live:   hair_sim_node + head_driver (translate: 0.3 m sideways in 0.5 s, 9 s after its start, head
 #           at z = 2 m clear of the shoulders, as in hair_node_checks.test) + a wind of 2 m/s along +y sent 3 s into the recording
-#           (ramp 0.5 s); `rosbag record /tf /tf_static /wind /hair_state` for 10 s.
+#           (ramp 0.5 s, stamped 0.2 s ahead, sent once both subscribers are connected); `rosbag record /tf /tf_static /wind /hair_state` for 10 s.
 #   replay: use_sim_time, hair_sim_node, `rosbag play --clock` of /tf /tf_static /wind from that bag;
 #           `rosbag record /hair_state`.
 # Usage: rosbag_roundtrip.sh SOURCE_ROOT DEVEL_PREFIX OUT_DIR
@@ -39,7 +39,27 @@ wait_topic /hair_state/header
 timeout 30 rosbag record -q -O "$OUT/live.bag" --duration=10 /tf /tf_static /wind /hair_state >"$OUT/live_record.log" 2>&1 &
 RECORD=$!
 sleep 3
-timeout 10 rostopic pub -1 /wind hair_sim_msgs/Wind "{header: {stamp: now}, velocity: {x: 0.0, y: 2.0, z: 0.0}, turbulence: 0.0, ramp_time: 0.5}" >/dev/null
+# Published once the live node and the recorder are connected, stamped 0.2 s ahead (within the node's
+# max_tf_age of 0.5 s): it reaches both before its stamp, so both runs start the ramp at the stamp. With
+# `rostopic pub` and a stamp of "now" it reached them 0.25-0.7 s later (rostopic starts and connects first):
+# the live node then started the ramp on its first substep after arrival, the replay on its first after the
+# recorder's receipt, a substep apart when the two straddled a boundary (4.2 mm once on a slow VM).
+timeout 20 python3 - <<'PY'
+import time
+import rospy
+from hair_sim_msgs.msg import Wind
+rospy.init_node('rosbag_roundtrip_wind', anonymous=True)
+pub = rospy.Publisher('/wind', Wind, queue_size=1)
+deadline = time.time() + 10.0
+while pub.get_num_connections() < 2 and time.time() < deadline:  # hair_sim_node and rosbag record
+    time.sleep(0.01)
+msg = Wind()
+msg.header.stamp = rospy.Time.now() + rospy.Duration(0.2)
+msg.velocity.y = 2.0
+msg.ramp_time = 0.5
+pub.publish(msg)
+time.sleep(0.5)
+PY
 wait $RECORD || true
 stop_all
 [ -f "$OUT/live.bag" ] || { echo "rosbag_roundtrip: FAIL: no live.bag"; exit 1; }
