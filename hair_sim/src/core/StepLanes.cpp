@@ -135,41 +135,41 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     V nx, ny, nz, vx, vy, vz, wx, wy, wz, fx, fy, fz, ux, uy, uz, sx, sy, sz, mx, my, mz, ex, ey, ez, d, ii;
     M active;
     bool any_active = false;
+    int idx[N];  // an idle lane reads point 0 (any point) and takes the idle values below instead
     for (int l = 0; l < N; ++l) {
-      const int i = pt[l];
-      active[l] = i >= 0 ? -1 : 0;
-      if (i >= 0) {
-        any_active = true;
-        const Vec3& n = job.direction[i];
-        const Vec3& v = job.velocity[i];
-        const Vec3& w = job.rate[i];
-        const Vec3& f = job.spring_force[i];
-        const Vec3& u = job.rest_dir[i];
-        const Vec3& s = job.styled_dir[i];
-        const Vec3& m = job.previous_mid[i];
-        const Vec3& e = job.positions[i];
-        nx[l] = n.x(), ny[l] = n.y(), nz[l] = n.z();
-        vx[l] = v.x(), vy[l] = v.y(), vz[l] = v.z();
-        wx[l] = w.x(), wy[l] = w.y(), wz[l] = w.z();
-        fx[l] = f.x(), fy[l] = f.y(), fz[l] = f.z();
-        ux[l] = u.x(), uy[l] = u.y(), uz[l] = u.z();
-        sx[l] = s.x(), sy[l] = s.y(), sz[l] = s.z();
-        mx[l] = m.x(), my[l] = m.y(), mz[l] = m.z();
-        ex[l] = e.x(), ey[l] = e.y(), ez[l] = e.z();
-        d[l] = job.length[i];
-        ii[l] = job.inv_inertia[i];
-      } else {  // an idle lane: a still vertical segment, never written back
-        nx[l] = 0.0, ny[l] = 0.0, nz[l] = 1.0;
-        vx[l] = vy[l] = vz[l] = wx[l] = wy[l] = wz[l] = fx[l] = fy[l] = fz[l] = 0.0;
-        ux[l] = 0.0, uy[l] = 0.0, uz[l] = 1.0;
-        sx[l] = 0.0, sy[l] = 0.0, sz[l] = 1.0;
-        mx[l] = px[l], my[l] = py[l], mz[l] = pz[l] + 0.5;
-        ex[l] = px[l], ey[l] = py[l], ez[l] = pz[l] + 1.0;
-        d[l] = 1.0;
-        ii[l] = 0.0;
-      }
+      active[l] = pt[l] >= 0 ? -1 : 0;
+      any_active |= pt[l] >= 0;
+      idx[l] = pt[l] >= 0 ? pt[l] : 0;
     }
     if (!any_active) break;
+    // The vectors are built from scalars in registers (not lane by lane through memory).
+    auto gather = [&](const double* base, int stride, int c) {
+      V r;
+      if constexpr (N == 4)
+        r = V{base[idx[0] * stride + c], base[idx[1] * stride + c], base[idx[2] * stride + c],
+              base[idx[3] * stride + c]};
+      else
+        r = V{base[idx[0] * stride + c], base[idx[1] * stride + c]};
+      return r;
+    };
+    auto vec3 = [&](const Vec3* a, int c, V idle) {
+      return sel(active, gather(reinterpret_cast<const double*>(a), 3, c), idle);
+    };
+
+    const V zero = splat<V>(0.0), one = splat<V>(1.0);
+    // An idle lane: a still vertical segment, never written back.
+    nx = vec3(job.direction, 0, zero), ny = vec3(job.direction, 1, zero), nz = vec3(job.direction, 2, one);
+    vx = vec3(job.velocity, 0, zero), vy = vec3(job.velocity, 1, zero), vz = vec3(job.velocity, 2, zero);
+    wx = vec3(job.rate, 0, zero), wy = vec3(job.rate, 1, zero), wz = vec3(job.rate, 2, zero);
+    fx = vec3(job.spring_force, 0, zero), fy = vec3(job.spring_force, 1, zero);
+    fz = vec3(job.spring_force, 2, zero);
+    ux = vec3(job.rest_dir, 0, zero), uy = vec3(job.rest_dir, 1, zero), uz = vec3(job.rest_dir, 2, one);
+    sx = vec3(job.styled_dir, 0, zero), sy = vec3(job.styled_dir, 1, zero), sz = vec3(job.styled_dir, 2, one);
+    mx = vec3(job.previous_mid, 0, px), my = vec3(job.previous_mid, 1, py);
+    mz = vec3(job.previous_mid, 2, pz + 0.5);
+    ex = vec3(job.positions, 0, px), ey = vec3(job.positions, 1, py), ez = vec3(job.positions, 2, pz + 1.0);
+    d = sel(active, gather(job.length, 1, 0), one);
+    ii = sel(active, gather(job.inv_inertia, 1, 0), zero);
 
     // Segment midpoints; the turbulence is evaluated there (world points), lane by lane.
     const V hd = 0.5 * d;
