@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "BenchMotion.hpp"
 #include "hair_sim/core/Simulator.hpp"
 #include "hair_sim/core/geometry/HairMeshBuilder.hpp"
 #include "hair_sim/core/model/HairstyleGenerator.hpp"
@@ -13,29 +14,8 @@
 namespace {
 
 using namespace hair_sim;
-
-Hairstyle benchHairstyle(const SimConfig& config, int strips) {
-  GeneratorOptions options;
-  options.strips = strips;
-  options.rings = std::max(5, static_cast<int>(std::sqrt(strips / 4.0)));
-  Iso3 rest = Iso3::Identity();
-  rest.translation() = Vec3(0.0, 0.0, 1.6);
-  return generateHairstyle(config, rest, options);
-}
-
-/// The benchmarks' motion at substep n: the head nodding and turning in a steady wind, the bodies on the
-/// head moving with it; `pose` gets the head pose.
-StepInputs benchInputs(const SimConfig& config, const Iso3& rest, HeadMotionEstimator& head, long n,
-                       double dt, Iso3& pose) {
-  pose = rest;
-  pose.linear() = rotationFromRpy(Vec3(0.0, 0.2 * std::sin(3.0 * n * dt), 0.6 * std::sin(2.0 * n * dt)));
-  StepInputs in;
-  in.head = head.update(pose, dt);
-  in.wind = Vec3(1.5, 1.0, 0.0);
-  for (const Body& b : config.bodies)
-    in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
-  return in;
-}
+using hair_sim::bench::benchHairstyle;
+using hair_sim::bench::benchInputs;
 
 /// Simulator set-up (chains, rest compensation, spring pairs through the grid); items = strips.
 void BM_Setup(benchmark::State& state) {
@@ -51,8 +31,7 @@ BENCHMARK(BM_Setup)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMilliseco
 
 void runStep(benchmark::State& state, Simulator::StepPath path, int threads = 1) {
   const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
-  Iso3 rest = Iso3::Identity();
-  rest.translation() = Vec3(0.0, 0.0, 1.6);
+  const Iso3 rest = bench::benchRestPose();
   Simulator sim(benchHairstyle(config, static_cast<int>(state.range(0))), config.physics, config.bodies);
   sim.setStepPath(path);
   sim.setThreads(threads);
@@ -94,8 +73,7 @@ BENCHMARK(BM_Step2Threads)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMi
 /// out of the 5 bodies, the look); items = vertices; threads: HairMeshBuilder::setThreads (wall time).
 void BM_MeshBuild(benchmark::State& state) {
   const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
-  Iso3 rest = Iso3::Identity();
-  rest.translation() = Vec3(0.0, 0.0, 1.6);
+  const Iso3 rest = bench::benchRestPose();
   const Hairstyle style = benchHairstyle(config, static_cast<int>(state.range(0)));
   Simulator sim(style, config.physics, config.bodies);
   HeadMotionEstimator head;

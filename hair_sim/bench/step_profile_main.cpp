@@ -1,0 +1,125 @@
+/// hair_sim_step_profile: BM_Step's hairstyle and motion for a fixed number of substeps, for profilers that
+/// count (callgrind, perf stat) and for checking that a change keeps the simulation's bits.
+///
+///   hair_sim_step_profile [--strips N] [--warmup N] [--substeps N] [--path lanes|baseline|exact]
+///                         [--threads N] [--config FILE]
+///
+/// Runs --warmup substeps (default 480: 2 s, the hair moving and lying on the bodies), then --substeps
+/// (default 100) more, each through step_profile_measured() (a function of its own, for
+/// `valgrind --tool=callgrind --toggle-collect=step_profile_measured`). Prints one JSON line: strips,
+/// control points, ns per control-point update over the measured substeps, the share of strips that took
+/// the exact step in them, and state_hash, the FNV-1a hash of every control point's position (head frame)
+/// at the end: the same for the same inputs on any path, thread count or instruction set.
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "BenchMotion.hpp"
+
+using namespace hair_sim;
+
+extern "C" __attribute__((noinline)) void step_profile_measured(Simulator& sim, const StepInputs& in) {
+  sim.step(in);
+}
+
+namespace {
+
+[[noreturn]] void usage(const std::string& why) {
+  std::fprintf(
+      stderr,
+      "hair_sim_step_profile: %s\nusage: hair_sim_step_profile [--strips N] [--warmup N] [--substeps N] "
+      "[--path lanes|baseline|exact] [--threads N] [--config FILE]\n",
+      why.c_str());
+  std::exit(2);
+}
+
+long number(const char* flag, const char* text, long min, long max) {
+  char* end = nullptr;
+  const long value = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || value < min || value > max)
+    usage(std::string(flag) + " wants a whole number in [" + std::to_string(min) + ", " +
+          std::to_string(max) + "], got '" + text + "'");
+  return value;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  long strips = 1000, warmup = 480, substeps = 100, threads = 1;
+  Simulator::StepPath path = Simulator::StepPath::Lanes;
+  std::string path_name = "lanes";
+  std::string config_file = std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml";
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "--help" || flag == "-h") usage("help");
+    if (i + 1 >= argc) usage(flag + " needs a value");
+    const char* value = argv[++i];
+    if (flag == "--strips")
+      strips = number("--strips", value, 1, 1000000);
+    else if (flag == "--warmup")
+      warmup = number("--warmup", value, 0, 100000000);
+    else if (flag == "--substeps")
+      substeps = number("--substeps", value, 1, 100000000);
+    else if (flag == "--threads")
+      threads = number("--threads", value, 1, 64);
+    else if (flag == "--config")
+      config_file = value;
+    else if (flag == "--path") {
+      path_name = value;
+      if (path_name == "lanes")
+        path = Simulator::StepPath::Lanes;
+      else if (path_name == "baseline")
+        path = Simulator::StepPath::LanesBaseline;
+      else if (path_name == "exact")
+        path = Simulator::StepPath::Exact;
+      else
+        usage("--path wants lanes, baseline or exact, got '" + path_name + "'");
+    } else {
+      usage("unknown option '" + flag + "'");
+    }
+  }
+  try {
+    const SimConfig config = loadSimConfig(config_file);
+    const Iso3 rest = bench::benchRestPose();
+    Simulator sim(bench::benchHairstyle(config, static_cast<int>(strips)), config.physics, config.bodies);
+    sim.setStepPath(path);
+    sim.setThreads(static_cast<int>(threads));
+    HeadMotionEstimator head;
+    head.reset(rest);
+    const double dt = config.physics.substep;
+    double exact = 0.0, seconds = 0.0;
+    Iso3 pose;
+    for (long n = 1; n <= warmup + substeps; ++n) {
+      const StepInputs in = bench::benchInputs(config, rest, head, n, dt, pose);
+      if (n <= warmup) {
+        sim.step(in);
+        continue;
+      }
+      const auto t0 = std::chrono::steady_clock::now();
+      step_profile_measured(sim, in);
+      seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      exact += sim.exactStripCount();
+    }
+    std::uint64_t hash = 1469598103934665603ull;
+    for (const Vec3& p : sim.positionsHead()) {
+      unsigned char bytes[sizeof(double) * 3];
+      std::memcpy(bytes, p.data(), sizeof(bytes));
+      for (unsigned char b : bytes) hash = (hash ^ b) * 1099511628211ull;
+    }
+    const double strip_count = static_cast<double>(sim.hairstyle().strips.size());
+    std::printf(
+        "{\"strips\": %ld, \"control_points\": %d, \"path\": \"%s\", \"threads\": %ld, \"warmup\": %ld, "
+        "\"substeps\": %ld, \"ns_per_update\": %.1f, \"exact_share\": %.4f, \"state_hash\": \"%016llx\"}\n",
+        strips, sim.controlPointCount(), path_name.c_str(), threads, warmup, substeps,
+        1e9 * seconds / (static_cast<double>(substeps) * sim.controlPointCount()),
+        exact / (static_cast<double>(substeps) * strip_count), static_cast<unsigned long long>(hash));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hair_sim_step_profile: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
