@@ -134,14 +134,15 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     const int* pt = job.point + r * W + l0;
     V nx, ny, nz, vx, vy, vz, wx, wy, wz, fx, fy, fz, ux, uy, uz, sx, sy, sz, mx, my, mz, ex, ey, ez, d, ii;
     M active;
-    bool any_active = false;
+    int active_count = 0;
     int idx[N];  // an idle lane reads point 0 (any point) and takes the idle values below instead
     for (int l = 0; l < N; ++l) {
       active[l] = pt[l] >= 0 ? -1 : 0;
-      any_active |= pt[l] >= 0;
+      active_count += pt[l] >= 0 ? 1 : 0;
       idx[l] = pt[l] >= 0 ? pt[l] : 0;
     }
-    if (!any_active) break;
+    if (active_count == 0) break;
+    const bool all_active = active_count == N;
     // The vectors are built from scalars in registers (not lane by lane through memory).
     auto gather = [&](const double* base, int stride, int c) {
       V r;
@@ -152,24 +153,30 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
         r = V{base[idx[0] * stride + c], base[idx[1] * stride + c]};
       return r;
     };
-    auto vec3 = [&](const Vec3* a, int c, V idle) {
-      return sel(active, gather(reinterpret_cast<const double*>(a), 3, c), idle);
-    };
-
-    const V zero = splat<V>(0.0), one = splat<V>(1.0);
-    // An idle lane: a still vertical segment, never written back.
-    nx = vec3(job.direction, 0, zero), ny = vec3(job.direction, 1, zero), nz = vec3(job.direction, 2, one);
-    vx = vec3(job.velocity, 0, zero), vy = vec3(job.velocity, 1, zero), vz = vec3(job.velocity, 2, zero);
-    wx = vec3(job.rate, 0, zero), wy = vec3(job.rate, 1, zero), wz = vec3(job.rate, 2, zero);
-    fx = vec3(job.spring_force, 0, zero), fy = vec3(job.spring_force, 1, zero);
-    fz = vec3(job.spring_force, 2, zero);
-    ux = vec3(job.rest_dir, 0, zero), uy = vec3(job.rest_dir, 1, zero), uz = vec3(job.rest_dir, 2, one);
-    sx = vec3(job.styled_dir, 0, zero), sy = vec3(job.styled_dir, 1, zero), sz = vec3(job.styled_dir, 2, one);
-    mx = vec3(job.previous_mid, 0, px), my = vec3(job.previous_mid, 1, py);
-    mz = vec3(job.previous_mid, 2, pz + 0.5);
-    ex = vec3(job.positions, 0, px), ey = vec3(job.positions, 1, py), ez = vec3(job.positions, 2, pz + 1.0);
-    d = sel(active, gather(job.length, 1, 0), one);
-    ii = sel(active, gather(job.inv_inertia, 1, 0), zero);
+    auto vec3 = [&](const Vec3* a, int c) { return gather(reinterpret_cast<const double*>(a), 3, c); };
+    nx = vec3(job.direction, 0), ny = vec3(job.direction, 1), nz = vec3(job.direction, 2);
+    vx = vec3(job.velocity, 0), vy = vec3(job.velocity, 1), vz = vec3(job.velocity, 2);
+    wx = vec3(job.rate, 0), wy = vec3(job.rate, 1), wz = vec3(job.rate, 2);
+    fx = vec3(job.spring_force, 0), fy = vec3(job.spring_force, 1), fz = vec3(job.spring_force, 2);
+    ux = vec3(job.rest_dir, 0), uy = vec3(job.rest_dir, 1), uz = vec3(job.rest_dir, 2);
+    sx = vec3(job.styled_dir, 0), sy = vec3(job.styled_dir, 1), sz = vec3(job.styled_dir, 2);
+    mx = vec3(job.previous_mid, 0), my = vec3(job.previous_mid, 1), mz = vec3(job.previous_mid, 2);
+    ex = vec3(job.positions, 0), ey = vec3(job.positions, 1), ez = vec3(job.positions, 2);
+    d = gather(job.length, 1, 0);
+    ii = gather(job.inv_inertia, 1, 0);
+    if (!all_active) {  // an idle lane: a still vertical segment, never written back
+      const V zero = splat<V>(0.0), one = splat<V>(1.0);
+      nx = sel(active, nx, zero), ny = sel(active, ny, zero), nz = sel(active, nz, one);
+      vx = sel(active, vx, zero), vy = sel(active, vy, zero), vz = sel(active, vz, zero);
+      wx = sel(active, wx, zero), wy = sel(active, wy, zero), wz = sel(active, wz, zero);
+      fx = sel(active, fx, zero), fy = sel(active, fy, zero), fz = sel(active, fz, zero);
+      ux = sel(active, ux, zero), uy = sel(active, uy, zero), uz = sel(active, uz, one);
+      sx = sel(active, sx, zero), sy = sel(active, sy, zero), sz = sel(active, sz, one);
+      mx = sel(active, mx, px), my = sel(active, my, py), mz = sel(active, mz, pz + 0.5);
+      ex = sel(active, ex, px), ey = sel(active, ey, py), ez = sel(active, ez, pz + 1.0);
+      d = sel(active, d, one);
+      ii = sel(active, ii, zero);
+    }
 
     // Segment midpoints; the turbulence is evaluated there (world points), lane by lane.
     const V hd = 0.5 * d;
