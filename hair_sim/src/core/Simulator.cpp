@@ -326,8 +326,8 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       ++exact_strips_;
       continue;
     }
-    for (std::size_t i = static_cast<std::size_t>(first); i < static_cast<std::size_t>(end); ++i)
-      max_rate2 = std::max(max_rate2, commitLanes(i));
+    max_rate2 =
+        std::max(max_rate2, commitLanes(static_cast<std::size_t>(first), static_cast<std::size_t>(end)));
   }
   tally.max_rate2 = std::max(tally.max_rate2, max_rate2);
 }
@@ -346,6 +346,19 @@ void Simulator::setThreads(int threads) {
 }
 
 int Simulator::threads() const { return workers_ ? workers_->helpers() + 1 : 1; }
+
+double Simulator::commitLanes(std::size_t begin, std::size_t end) {
+  const auto at = [](auto& v, std::size_t k) { return v.begin() + static_cast<std::ptrdiff_t>(k); };
+  std::copy(at(new_position_, begin), at(new_position_, end), at(positions_, begin));
+  std::copy(at(new_direction_, begin), at(new_direction_, end), at(direction_, begin));
+  std::copy(at(new_rate_, begin), at(new_rate_, end), at(rate_, begin));
+  std::copy(at(new_velocity_, begin), at(new_velocity_, end), at(velocity_, begin));
+  std::copy(at(new_mid_, begin), at(new_mid_, end), at(previous_mid_, begin));
+  std::fill(at(moved_in_step_, begin), at(moved_in_step_, end), steps_);
+  double max_rate2 = 0.0;
+  for (std::size_t i = begin; i < end; ++i) max_rate2 = std::max(max_rate2, rate_[i].squaredNorm());
+  return max_rate2;
+}
 
 double Simulator::commitLanes(std::size_t i) {
   positions_[i] = new_position_[i];

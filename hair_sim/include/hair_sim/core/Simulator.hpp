@@ -196,6 +196,8 @@ class Simulator {
   void stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally);
   /// Point i takes the lanes' result (new_*_) as its state at the end of the substep; returns |w|^2.
   double commitLanes(std::size_t i);
+  /// commitLanes for the points [begin, end) (a strip's points below its roots), as block copies.
+  double commitLanes(std::size_t begin, std::size_t end);
   /// Inertia floors (1 / I) and compensated rest directions from the lengths, styled directions and params_.
   void updateSegmentConstants();
   void buildSprings();
