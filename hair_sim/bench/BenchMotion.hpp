@@ -3,12 +3,10 @@
 /// of 2 x 5 control points on the default config's head, the head nodding and turning in a steady wind.
 #include <algorithm>
 #include <cmath>
-#include <string>
 
 #include "hair_sim/core/Simulator.hpp"
 #include "hair_sim/core/model/HairstyleGenerator.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
-#include "hair_sim/tools/OfflineRunner.hpp"
 
 namespace hair_sim {
 namespace bench {

@@ -14,9 +14,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <exception>
 #include <string>
+#include <vector>
 
 #include "BenchMotion.hpp"
 
@@ -28,12 +28,12 @@ extern "C" __attribute__((noinline)) void step_profile_measured(Simulator& sim, 
 
 namespace {
 
+const char* const kUsage =
+    "usage: hair_sim_step_profile [--strips N] [--warmup N] [--substeps N] [--path lanes|baseline|exact] "
+    "[--threads N] [--config FILE]\n";
+
 [[noreturn]] void usage(const std::string& why) {
-  std::fprintf(
-      stderr,
-      "hair_sim_step_profile: %s\nusage: hair_sim_step_profile [--strips N] [--warmup N] [--substeps N] "
-      "[--path lanes|baseline|exact] [--threads N] [--config FILE]\n",
-      why.c_str());
+  std::fprintf(stderr, "hair_sim_step_profile: %s\n%s", why.c_str(), kUsage);
   std::exit(2);
 }
 
@@ -55,7 +55,10 @@ int main(int argc, char** argv) {
   std::string config_file = std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml";
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    if (flag == "--help" || flag == "-h") usage("help");
+    if (flag == "--help" || flag == "-h") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
     if (i + 1 >= argc) usage(flag + " needs a value");
     const char* value = argv[++i];
     if (flag == "--strips")
@@ -104,12 +107,12 @@ int main(int argc, char** argv) {
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       exact += sim.exactStripCount();
     }
-    std::uint64_t hash = 1469598103934665603ull;
-    for (const Vec3& p : sim.positionsHead()) {
-      unsigned char bytes[sizeof(double) * 3];
-      std::memcpy(bytes, p.data(), sizeof(bytes));
-      for (unsigned char b : bytes) hash = (hash ^ b) * 1099511628211ull;
-    }
+    // FNV-1a over the positions' bytes (contiguous: Vec3 is three doubles).
+    const std::vector<Vec3>& positions = sim.positionsHead();
+    const unsigned char* bytes = reinterpret_cast<const unsigned char*>(positions.data());
+    std::uint64_t hash = 14695981039346656037ULL;
+    for (std::size_t k = 0; k < positions.size() * sizeof(Vec3); ++k)
+      hash = (hash ^ bytes[k]) * 1099511628211ULL;
     const double strip_count = static_cast<double>(sim.hairstyle().strips.size());
     std::printf(
         "{\"strips\": %ld, \"control_points\": %d, \"path\": \"%s\", \"threads\": %ld, \"warmup\": %ld, "

@@ -360,15 +360,7 @@ double Simulator::commitLanes(std::size_t begin, std::size_t end) {
   return max_rate2;
 }
 
-double Simulator::commitLanes(std::size_t i) {
-  positions_[i] = new_position_[i];
-  direction_[i] = new_direction_[i];
-  rate_[i] = new_rate_[i];
-  velocity_[i] = new_velocity_[i];
-  previous_mid_[i] = new_mid_[i];
-  moved_in_step_[i] = steps_;
-  return rate_[i].squaredNorm();
-}
+double Simulator::commitLanes(std::size_t i) { return commitLanes(i, i + 1); }
 
 void Simulator::updateSegmentConstants() {
   const double dt = params_.substep;

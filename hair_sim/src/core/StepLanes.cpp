@@ -145,13 +145,11 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     const bool all_active = active_count == N;
     // The vectors are built from scalars in registers (not lane by lane through memory).
     auto gather = [&](const double* base, int stride, int c) {
-      V r;
       if constexpr (N == 4)
-        r = V{base[idx[0] * stride + c], base[idx[1] * stride + c], base[idx[2] * stride + c],
-              base[idx[3] * stride + c]};
+        return V{base[idx[0] * stride + c], base[idx[1] * stride + c], base[idx[2] * stride + c],
+                 base[idx[3] * stride + c]};
       else
-        r = V{base[idx[0] * stride + c], base[idx[1] * stride + c]};
-      return r;
+        return V{base[idx[0] * stride + c], base[idx[1] * stride + c]};
     };
     auto vec3 = [&](const Vec3* a, int c) { return gather(reinterpret_cast<const double*>(a), 3, c); };
     nx = vec3(job.direction, 0), ny = vec3(job.direction, 1), nz = vec3(job.direction, 2);
