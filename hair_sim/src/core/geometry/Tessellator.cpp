@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -260,6 +261,18 @@ void normalizeFrames(Vec3* normals, Vec3* tangents, std::size_t count) {
   }
 }
 
+/// True when none of the `count` doubles is infinite or NaN (exponent bits all ones). Integer operations
+/// only, so the compiler vectorises the loop.
+bool allFinite(const double* values, std::size_t count) {
+  std::uint64_t non_finite = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    std::uint64_t bits;
+    std::memcpy(&bits, values + i, sizeof bits);
+    non_finite |= static_cast<std::uint64_t>((bits & 0x7FF0000000000000ULL) == 0x7FF0000000000000ULL);
+  }
+  return non_finite == 0;
+}
+
 /// Sets the vertex count (resizing only changes capacity when the mesh grows) and u_param.
 void prepareMesh(StripMesh& mesh, int n_u, int n_v) {
   const std::size_t count = static_cast<std::size_t>(n_u) * static_cast<std::size_t>(n_v);
@@ -271,12 +284,13 @@ void prepareMesh(StripMesh& mesh, int n_u, int n_v) {
   mesh.v_param.resize(count);
   mesh.u_param.resize(count);
   const float inverse = 1.0f / static_cast<float>(n_u - 1);
-  for (int iv = 0; iv < n_v; ++iv) {
-    float* row = mesh.u_param.data() + static_cast<std::size_t>(iv) * n_u;
-    for (int iu = 0; iu < n_u; ++iu) {
-      row[iu] = static_cast<float>(iu) * inverse;
-    }
-    row[n_u - 1] = 1.0f;
+  float* u_param = mesh.u_param.data();
+  for (int iu = 0; iu < n_u; ++iu) {
+    u_param[iu] = static_cast<float>(iu) * inverse;
+  }
+  u_param[n_u - 1] = 1.0f;
+  for (std::size_t i = static_cast<std::size_t>(n_u); i < count; ++i) {  // the other rows repeat row 0
+    u_param[i] = u_param[i - static_cast<std::size_t>(n_u)];
   }
 }
 
@@ -629,6 +643,21 @@ HAIR_SIM_AVX2_TARGET inline void storeQuadLanes(const Quad3& value, double* firs
   }
 }
 
+/// Stores float lane l < count at out + l * stride.
+HAIR_SIM_AVX2_TARGET inline void storeFloatLanes(__m128 value, float* out, std::size_t stride, int count) {
+  _mm_store_ss(out, value);
+  if (count > 1) {
+    _mm_store_ss(out + stride, _mm_movehdup_ps(value));
+  }
+  if (count > 2) {
+    const __m128 high = _mm_movehl_ps(value, value);
+    _mm_store_ss(out + 2 * stride, high);
+    if (count > 3) {
+      _mm_store_ss(out + 3 * stride, _mm_movehdup_ps(high));
+    }
+  }
+}
+
 /// CachedBasis stage 1 (AVX2): as columnCurvePairs with four samples per step, reading the control points
 /// directly (broadcast loads).
 template <int K>
@@ -686,7 +715,6 @@ HAIR_SIM_AVX2_TARGET void cachedColumnQuads(const double* curve, const double* c
   __m256d last_y = _mm256_setzero_pd();
   __m256d last_z = _mm256_setzero_pd();
   double length = 0.0;
-  alignas(32) double segment[4];
   for (int iv = 0; iv < n_v; iv += 4) {
     const int count = std::min(4, n_v - iv);
     const Quad3 c0 = loadQuad3(curve + iv, s);
@@ -709,78 +737,83 @@ HAIR_SIM_AVX2_TARGET void cachedColumnQuads(const double* curve, const double* c
     const __m256d sx = p.x - _mm256_shuffle_pd(_mm256_permute2f128_pd(last_x, p.x, 0x21), p.x, 0x5);
     const __m256d sy = p.y - _mm256_shuffle_pd(_mm256_permute2f128_pd(last_y, p.y, 0x21), p.y, 0x5);
     const __m256d sz = p.z - _mm256_shuffle_pd(_mm256_permute2f128_pd(last_z, p.z, 0x21), p.z, 0x5);
-    _mm256_store_pd(segment, _mm256_sqrt_pd(sx * sx + sy * sy + sz * sz));
-    double walked[4];
-    double run = length;
-    int crossing = count;
-    for (int l = 0; l < count; ++l) {
-      run += segment[l];
-      walked[l] = run;
-      if (run > hair_length) {
-        crossing = l;
-        break;
-      }
-    }
+    const __m256d segments = _mm256_sqrt_pd(sx * sx + sy * sy + sz * sz);
+    // The walked length after each lane, added in lane order (as the SSE2 and scalar kernels do). Lanes past
+    // `count` repeat the last sample (zero segment). Segments are >= 0, so the walked length never decreases
+    // and the quad reaches the hair length exactly when its last lane does.
+    const __m128d low = _mm256_castpd256_pd128(segments);
+    const __m128d high = _mm256_extractf128_pd(segments, 1);
+    const double walked0 = length + _mm_cvtsd_f64(low);
+    const double walked1 = walked0 + _mm_cvtsd_f64(_mm_unpackhi_pd(low, low));
+    const double walked2 = walked1 + _mm_cvtsd_f64(high);
+    const double walked3 = walked2 + _mm_cvtsd_f64(_mm_unpackhi_pd(high, high));
     const std::size_t a = static_cast<std::size_t>(iv) * n_u + iu;
-    if (crossing < count) {
-      // The hair length is reached in this quad (once per column at most): finish in scalar code.
-      alignas(32) double lanes[9][4];
-      _mm256_store_pd(lanes[0], p.x);
-      _mm256_store_pd(lanes[1], p.y);
-      _mm256_store_pd(lanes[2], p.z);
-      _mm256_store_pd(lanes[3], du.x);
-      _mm256_store_pd(lanes[4], du.y);
-      _mm256_store_pd(lanes[5], du.z);
-      _mm256_store_pd(lanes[6], dv.x);
-      _mm256_store_pd(lanes[7], dv.y);
-      _mm256_store_pd(lanes[8], dv.z);
-      for (int l = 0; l < crossing; ++l) {
-        const std::size_t index = a + static_cast<std::size_t>(l) * n_u;
-        for (int k = 0; k < 3; ++k) {
-          positions[3 * index + k] = lanes[k][l];
-          normals[3 * index + k] = lanes[3 + k][l];
-          tangents[3 * index + k] = lanes[6 + k][l];
+    if (!(walked3 > hair_length)) {
+      storeQuadLanes(p, positions + 3 * a, vertex_stride, count);
+      Quad3 n;
+      Quad3 t;
+      if (unitFrames4(du, dv, n, t)) {
+        storeQuadLanes(n, normals + 3 * a, vertex_stride, count);
+        storeQuadLanes(t, tangents + 3 * a, vertex_stride, count);
+      } else {
+        storeQuadLanes(du, normals + 3 * a, vertex_stride, count);
+        storeQuadLanes(dv, tangents + 3 * a, vertex_stride, count);
+        for (int l = 0; l < count; ++l) {
+          const std::size_t offset = 3 * a + static_cast<std::size_t>(l) * vertex_stride;
+          normalizeFrame(normals + offset, tangents + offset);
         }
-        normalizeFrame(normals + 3 * index, tangents + 3 * index);
-        v_param[index] = static_cast<float>(walked[l] * inverse_length);
       }
-      const int j = iv + crossing;  // j > 0: the root has a zero segment
-      double previous[3], previous_du[3], previous_dv[3], current_du[3], current_dv[3], step[3];
-      const double* before = positions + 3 * (a + static_cast<std::size_t>(crossing) * n_u) - vertex_stride;
-      derivativesAt(curve, curve_dv, s, weight, derivative_weight, W, j - 1, previous_du, previous_dv);
+      const __m128 parameter =
+          _mm256_cvtpd_ps(_mm256_set_pd(walked3, walked2, walked1, walked0) * _mm256_set1_pd(inverse_length));
+      storeFloatLanes(parameter, v_param + a, static_cast<std::size_t>(n_u), count);
+      length = walked3;
+      last_x = p.x;
+      last_y = p.y;
+      last_z = p.z;
+      continue;
+    }
+    // The hair length is reached in this quad (once per column at most): finish in scalar code.
+    const double walked[4] = {walked0, walked1, walked2, walked3};
+    int crossing = 0;
+    while (crossing < count - 1 && !(walked[crossing] > hair_length)) {
+      ++crossing;
+    }
+    alignas(32) double segment[4];
+    _mm256_store_pd(segment, segments);
+    alignas(32) double lanes[9][4];
+    _mm256_store_pd(lanes[0], p.x);
+    _mm256_store_pd(lanes[1], p.y);
+    _mm256_store_pd(lanes[2], p.z);
+    _mm256_store_pd(lanes[3], du.x);
+    _mm256_store_pd(lanes[4], du.y);
+    _mm256_store_pd(lanes[5], du.z);
+    _mm256_store_pd(lanes[6], dv.x);
+    _mm256_store_pd(lanes[7], dv.y);
+    _mm256_store_pd(lanes[8], dv.z);
+    for (int l = 0; l < crossing; ++l) {
+      const std::size_t index = a + static_cast<std::size_t>(l) * n_u;
       for (int k = 0; k < 3; ++k) {
-        previous[k] = before[k];
-        current_du[k] = lanes[3 + k][crossing];
-        current_dv[k] = lanes[6 + k][crossing];
-        step[k] = lanes[k][crossing] - previous[k];
+        positions[3 * index + k] = lanes[k][l];
+        normals[3 * index + k] = lanes[3 + k][l];
+        tangents[3 * index + k] = lanes[6 + k][l];
       }
-      clipColumn(mesh, iu, j, previous, step, segment[crossing],
-                 crossing == 0 ? length : walked[crossing - 1], hair_length, previous_du, current_du,
-                 previous_dv, current_dv);
-      normalizeColumnFrom(mesh, iu, j);
-      return;
+      normalizeFrame(normals + 3 * index, tangents + 3 * index);
+      v_param[index] = static_cast<float>(walked[l] * inverse_length);
     }
-    storeQuadLanes(p, positions + 3 * a, vertex_stride, count);
-    Quad3 n;
-    Quad3 t;
-    if (unitFrames4(du, dv, n, t)) {
-      storeQuadLanes(n, normals + 3 * a, vertex_stride, count);
-      storeQuadLanes(t, tangents + 3 * a, vertex_stride, count);
-    } else {
-      storeQuadLanes(du, normals + 3 * a, vertex_stride, count);
-      storeQuadLanes(dv, tangents + 3 * a, vertex_stride, count);
-      for (int l = 0; l < count; ++l) {
-        const std::size_t offset = 3 * a + static_cast<std::size_t>(l) * vertex_stride;
-        normalizeFrame(normals + offset, tangents + offset);
-      }
+    const int j = iv + crossing;  // j > 0: the root has a zero segment
+    double previous[3], previous_du[3], previous_dv[3], current_du[3], current_dv[3], step[3];
+    const double* before = positions + 3 * (a + static_cast<std::size_t>(crossing) * n_u) - vertex_stride;
+    derivativesAt(curve, curve_dv, s, weight, derivative_weight, W, j - 1, previous_du, previous_dv);
+    for (int k = 0; k < 3; ++k) {
+      previous[k] = before[k];
+      current_du[k] = lanes[3 + k][crossing];
+      current_dv[k] = lanes[6 + k][crossing];
+      step[k] = lanes[k][crossing] - previous[k];
     }
-    for (int l = 0; l < count; ++l) {
-      v_param[a + static_cast<std::size_t>(l) * n_u] = static_cast<float>(walked[l] * inverse_length);
-    }
-    length = walked[count - 1];
-    last_x = p.x;
-    last_y = p.y;
-    last_z = p.z;
+    clipColumn(mesh, iu, j, previous, step, segment[crossing], crossing == 0 ? length : walked[crossing - 1],
+               hair_length, previous_du, current_du, previous_dv, current_dv);
+    normalizeColumnFrom(mesh, iu, j);
+    return;
   }
 }
 #endif
@@ -1144,8 +1177,11 @@ void Tessellator::tessellate(const Vec3* control_points, int columns, int rows, 
     throw std::invalid_argument(std::string(where) + " : hair_length must be positive and finite, got " +
                                 std::to_string(hair_length));
   }
-  for (int i = 0; i < columns * rows; ++i) {
-    if (!control_points[i].allFinite()) {
+  if (!allFinite(control_points->data(), 3 * static_cast<std::size_t>(columns) * rows)) {
+    for (int i = 0; i < columns * rows; ++i) {
+      if (control_points[i].allFinite()) {
+        continue;
+      }
       throw std::invalid_argument(std::string(where) + " : control point " + std::to_string(i) + " (column " +
                                   std::to_string(i % columns) + ", row " + std::to_string(i / columns) +
                                   ") is not finite");
