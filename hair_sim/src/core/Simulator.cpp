@@ -888,18 +888,20 @@ template <typename ValidFor, typename ValidAll>
 Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const ValidFor& validFor,
                              const ValidAll& validBodies, const std::vector<Ellipsoid>& now) const {
   const std::size_t nb = now.size();
-  // Bisection on the arc dir -> to (`to` valid) for the valid direction closest to `dir`.
+  // Bisection on the arc dir -> to (`to` valid) for the valid direction closest to `dir`, 40 halvings of the
+  // angle. The first midpoint by rotation (the arc may be up to pi long); after it the arc is at most pi / 2
+  // long and the midpoint of an arc is the normalised sum of its unit ends (|lo + hi| >= sqrt 2): no sine or
+  // cosine per probe.
   auto bisect = [&](const Vec3& to) {
-    const Vec3 arc = rotationVectorBetween(dir, to);
-    double lo = 0.0, hi = 1.0;
-    for (int it = 0; it < 40; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      if (validBodies(rotateByVector(arc * mid, dir)))
-        hi = mid;
-      else
-        lo = mid;
+    Vec3 lo = dir.normalized();
+    Vec3 hi = to.normalized();
+    const Vec3 half = rotateByVector(0.5 * rotationVectorBetween(lo, hi), lo).normalized();
+    (validBodies(half) ? hi : lo) = half;
+    for (int it = 1; it < 40; ++it) {
+      const Vec3 mid = (lo + hi).normalized();
+      (validBodies(mid) ? hi : lo) = mid;
     }
-    return Vec3(rotateByVector(arc * hi, dir).normalized());
+    return hi;
   };
   // Candidate escape directions: the outward normal at the pivot's nearest point of each violated
   // body (pivot + d N clears a convex body) and their mean (a crevice between two bodies).
