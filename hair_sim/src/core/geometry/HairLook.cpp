@@ -5,6 +5,18 @@
 #include <stdexcept>
 #include <string>
 
+// The lighting of a vertex column is compiled twice, for the x86-64 baseline and for AVX2 (chosen at run
+// time when the CPU has it; -DHAIR_SIM_NO_AVX2 leaves the baseline alone): the same operations in the same
+// order without FMA contraction, so both give the same bits (test HairLookSimdPathsBitIdentical).
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(HAIR_SIM_NO_AVX2)
+#define HAIR_LOOK_AVX2 1
+#endif
+#if defined(__GNUC__) || defined(__clang__)
+#define HAIR_LOOK_INLINE inline __attribute__((always_inline))
+#else
+#define HAIR_LOOK_INLINE inline
+#endif
+
 namespace hair_sim {
 
 namespace {
@@ -46,15 +58,17 @@ double bump(double t) {
 }
 
 /// std::min(a, b) and std::max(a, b) by value (the same results), for the vectorised loops.
-inline double minOf(double a, double b) { return b < a ? b : a; }
-inline double maxOf(double a, double b) { return a < b ? b : a; }
+HAIR_LOOK_INLINE double minOf(double a, double b) { return b < a ? b : a; }
+HAIR_LOOK_INLINE double maxOf(double a, double b) { return a < b ? b : a; }
 
-double smoothstep(double x) {
+HAIR_LOOK_INLINE double smoothstep(double x) {
   x = maxOf(0.0, minOf(1.0, x));
   return x * x * (3.0 - 2.0 * x);
 }
 
-float clampChannel(double value) { return static_cast<float>(maxOf(0.0, minOf(1.0, value))); }
+HAIR_LOOK_INLINE float clampChannel(double value) {
+  return static_cast<float>(maxOf(0.0, minOf(1.0, value)));
+}
 
 void checkRange(double value, double low, double high, bool high_inclusive, const char* name) {
   const bool ok = std::isfinite(value) && value >= low && (high_inclusive ? value <= high : value < high);
@@ -88,7 +102,7 @@ void checkMesh(const StripMesh& mesh, const char* where) {
 }
 
 /// sin of the angle whose cosine is `cosine` (|cosine| <= 1 up to rounding): sqrt(max(0, 1 - cosine^2)).
-inline double sine(double cosine) { return std::sqrt(maxOf(0.0, 1.0 - cosine * cosine)); }
+HAIR_LOOK_INLINE double sine(double cosine) { return std::sqrt(maxOf(0.0, 1.0 - cosine * cosine)); }
 
 /// Vertices per chunk of HairLook::colour's vectorised loops.
 constexpr int kChunk = 64;
@@ -98,8 +112,8 @@ constexpr int kChunk = 64;
 /// the power of 0 (no branch on the data). An integer exponent (the default 40) by repeated squaring: a few
 /// multiplications, within a few ulp of std::pow, which took 9 % of hair_sim_node's time with hair_markers
 /// subscribed (every vertex, every frame).
-void specularTerms(const double* tl, const double* tv, const double* sin_l, int m, double exponent,
-                   double* out) {
+HAIR_LOOK_INLINE void specularTerms(const double* tl, const double* tv, const double* sin_l, int m,
+                                    double exponent, double* out) {
   double power[kChunk];
   for (int k = 0; k < m; ++k) {
     const double raw = minOf(1.0, sin_l[k] * sine(tv[k]) - tl[k] * tv[k]);
@@ -116,6 +130,74 @@ void specularTerms(const double* tl, const double* tv, const double* sin_l, int 
   }
   for (int k = 0; k < m; ++k) out[k] = std::pow(power[k], exponent);
 }
+
+/// What HairLook::colour needs for the lighting of one vertex column.
+struct ColumnLighting {
+  const Vec3* tangents;
+  const float* v_param;
+  Rgba* colours;
+  int n_u, n_v, iu;
+  Vec3 light, view;
+  double ambient, specular_strength, specular_exponent;
+  double root_darkening, root_length, tip_fade_start;
+  double stripe_alpha, stripe_brightness;
+  double base_r, base_g, base_b, base_a;
+  bool pattern;
+};
+
+/// One vertex column of HairLook::colour in chunks, each step of the lighting a loop over the chunk that the
+/// compiler vectorises (HairLook.cpp: -O3, no errno, no trapping math): per vertex the same operations as
+/// diffuse(), specular(), rootFactor() and tipFade().
+HAIR_LOOK_INLINE void lightColumnBody(const ColumnLighting& in) {
+  for (int iv0 = 0; iv0 < in.n_v; iv0 += kChunk) {
+    const int m = std::min(kChunk, in.n_v - iv0);
+    double tl[kChunk], tv[kChunk], v[kChunk], sin_l[kChunk], highlight[kChunk];
+    float r[kChunk], g[kChunk], b[kChunk], a[kChunk];
+    for (int k = 0; k < m; ++k) {
+      const std::size_t index = static_cast<std::size_t>(iv0 + k) * in.n_u + in.iu;
+      tl[k] = in.tangents[index].dot(in.light);
+      tv[k] = in.tangents[index].dot(in.view);
+      v[k] = in.v_param[index];
+    }
+    for (int k = 0; k < m; ++k) sin_l[k] = sine(tl[k]);
+    specularTerms(tl, tv, sin_l, m, in.specular_exponent, highlight);
+    for (int k = 0; k < m; ++k) {
+      const double light = in.ambient + (1.0 - in.ambient) * sin_l[k];
+      // rootFactor(v[k])
+      const double root = 1.0 - in.root_darkening * (1.0 - smoothstep(v[k] / in.root_length));
+      const double shade = light * in.stripe_brightness * root;
+      const double h = in.specular_strength * highlight[k];
+      r[k] = clampChannel(in.base_r * shade + h);
+      g[k] = clampChannel(in.base_g * shade + h);
+      b[k] = clampChannel(in.base_b * shade + h);
+    }
+    if (in.pattern) {
+      for (int k = 0; k < m; ++k) {
+        // tipFade(v[k])
+        const double fade = 1.0 - smoothstep((v[k] - in.tip_fade_start) / (1.0 - in.tip_fade_start));
+        a[k] = clampChannel(in.base_a * in.stripe_alpha * fade);
+      }
+    } else {
+      for (int k = 0; k < m; ++k) a[k] = clampChannel(in.base_a);
+    }
+    for (int k = 0; k < m; ++k)
+      in.colours[static_cast<std::size_t>(iv0 + k) * in.n_u + in.iu] = Rgba{r[k], g[k], b[k], a[k]};
+  }
+}
+
+void lightColumnBaseline(const ColumnLighting& in) { lightColumnBody(in); }
+
+#if defined(HAIR_LOOK_AVX2)
+__attribute__((target("avx2"))) void lightColumnAvx2(const ColumnLighting& in) { lightColumnBody(in); }
+
+bool useAvx2() {
+  static const bool has = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
+  return has;
+}
+#endif
 
 }  // namespace
 
@@ -240,37 +322,35 @@ void HairLook::colour(const StripMesh& mesh, const Rgba& base, std::uint32_t str
                                                  : columnProfile(mesh, iu, strip_seed);
     const double stripe_alpha = 1.0 - contrast * (1.0 - profile);
     const double stripe_brightness = 1.0 - 0.5 * contrast * (1.0 - profile);
-    // Chunks of a vertex column, each step of the lighting a loop over the chunk that the compiler
-    // vectorises (HairLook.cpp: -O3, no errno, no trapping math): per vertex the same operations as
-    // diffuse(), specular(), rootFactor() and tipFade().
-    for (int iv0 = 0; iv0 < mesh.n_v; iv0 += kChunk) {
-      const int m = std::min(kChunk, mesh.n_v - iv0);
-      double tl[kChunk], tv[kChunk], v[kChunk], sin_l[kChunk], highlight[kChunk];
-      float r[kChunk], g[kChunk], b[kChunk], a[kChunk];
-      for (int k = 0; k < m; ++k) {
-        const std::size_t index = static_cast<std::size_t>(mesh.index(iu, iv0 + k));
-        tl[k] = mesh.tangents[index].dot(light_);
-        tv[k] = mesh.tangents[index].dot(view_);
-        v[k] = mesh.v_param[index];
-      }
-      for (int k = 0; k < m; ++k) sin_l[k] = sine(tl[k]);
-      specularTerms(tl, tv, sin_l, m, parameters_.specular_exponent, highlight);
-      for (int k = 0; k < m; ++k) {
-        const double light = ambient + (1.0 - ambient) * sin_l[k];
-        const double shade = light * stripe_brightness * rootFactor(v[k]);
-        const double h = parameters_.specular_strength * highlight[k];
-        r[k] = clampChannel(base_r * shade + h);
-        g[k] = clampChannel(base_g * shade + h);
-        b[k] = clampChannel(base_b * shade + h);
-      }
-      if (pattern) {
-        for (int k = 0; k < m; ++k) a[k] = clampChannel(base_a * stripe_alpha * tipFade(v[k]));
-      } else {
-        for (int k = 0; k < m; ++k) a[k] = clampChannel(base_a);
-      }
-      for (int k = 0; k < m; ++k)
-        colours[static_cast<std::size_t>(mesh.index(iu, iv0 + k))] = Rgba{r[k], g[k], b[k], a[k]};
+    ColumnLighting column;
+    column.tangents = mesh.tangents.data();
+    column.v_param = mesh.v_param.data();
+    column.colours = colours.data();
+    column.n_u = mesh.n_u;
+    column.n_v = mesh.n_v;
+    column.iu = iu;
+    column.light = light_;
+    column.view = view_;
+    column.ambient = ambient;
+    column.specular_strength = parameters_.specular_strength;
+    column.specular_exponent = parameters_.specular_exponent;
+    column.root_darkening = parameters_.root_darkening;
+    column.root_length = parameters_.root_length;
+    column.tip_fade_start = parameters_.tip_fade_start;
+    column.stripe_alpha = stripe_alpha;
+    column.stripe_brightness = stripe_brightness;
+    column.base_r = base_r;
+    column.base_g = base_g;
+    column.base_b = base_b;
+    column.base_a = base_a;
+    column.pattern = pattern;
+#if defined(HAIR_LOOK_AVX2)
+    if (useAvx2()) {
+      lightColumnAvx2(column);
+      continue;
     }
+#endif
+    lightColumnBaseline(column);
   }
 }
 

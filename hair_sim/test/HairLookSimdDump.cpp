@@ -1,0 +1,93 @@
+/// Prints a hash of every HairLook output bit (colorize with and without precomputed stripe profiles, shade)
+/// for a set of tessellated strips, levels of detail, hair lengths, colours and look parameters (the integer
+/// specular exponent by repeated squaring and a fractional one by pow). Built twice: against hair_sim_core
+/// (the lighting compiled for AVX2, chosen at run time when the CPU has it) and with HairLook.cpp compiled
+/// with -DHAIR_SIM_NO_AVX2 (the x86-64 baseline alone); the test HairLookSimdPathsBitIdentical compares the
+/// two outputs.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <vector>
+
+#include "hair_sim/core/geometry/HairLook.hpp"
+#include "hair_sim/core/geometry/Tessellator.hpp"
+
+namespace {
+
+using namespace hair_sim;
+
+/// FNV-1a over raw bytes.
+void hashBytes(std::uint64_t& hash, const void* data, std::size_t size) {
+  const unsigned char* bytes = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < size; ++i) {
+    hash = (hash ^ bytes[i]) * 1099511628211ULL;
+  }
+}
+
+/// A curved strip turning through every orientation to the light, deterministic; `seed` varies it.
+std::vector<Vec3> curvedGrid(int columns, int rows, int seed) {
+  std::vector<Vec3> points(static_cast<std::size_t>(columns * rows));
+  for (int c = 0; c < columns; ++c) {
+    Vec3 p(0.001 * std::sin(seed + c), 0.015 * c, 0.001 * std::cos(3 * seed + c));
+    double pitch = 0.3 + seed;
+    for (int r = 0; r < rows; ++r) {
+      points[static_cast<std::size_t>(r * columns + c)] = p;
+      pitch += 0.9 * std::sin(1.7 * r + seed) + 0.05 * c;
+      const double yaw = 1.2 * std::cos(2.3 * r + seed + c);
+      p += 0.08 * Vec3(std::cos(pitch) * std::cos(yaw), std::sin(yaw), -std::sin(pitch)).normalized();
+    }
+  }
+  return points;
+}
+
+}  // namespace
+
+int main() {
+  HairLookParameters fractional;
+  fractional.specular_exponent = 37.5;
+  fractional.stripe_contrast = 0.4;
+  fractional.light_direction = Vec3(0.3, -0.8, 0.5);
+  HairLookParameters dark;
+  dark.root_darkening = 0.9;
+  dark.root_length = 0.3;
+  dark.tip_fade_start = 0.2;
+  dark.specular_strength = 2.0;
+  dark.ambient = 0.0;
+  const HairLookParameters looks[] = {HairLookParameters{}, fractional, dark};
+  const Rgba colours[] = {Rgba{0.35f, 0.22f, 0.12f, 0.9f}, Rgba{1.5f, -0.2f, 0.5f, 1.0f}};
+  const LevelOfDetail levels[] = {{1, 1}, {2, 4}, {3, 7}, {8, 8}};  // {8, 8}: columns of 153 vertices
+  Tessellator tessellator;
+  StripMesh mesh;
+  std::vector<Rgba> out;
+  std::vector<double> profiles;
+  for (int l = 0; l < 3; ++l) {
+    const HairLook look(looks[l]);
+    for (const LevelOfDetail& level : levels) {
+      tessellator.setLevelOfDetail(level);
+      for (int columns = 2; columns <= 4; ++columns) {
+        for (int rows = 4; rows <= 20; rows += 8) {
+          for (int seed = 0; seed < 3; ++seed) {
+            const std::vector<Vec3> grid = curvedGrid(columns, rows, seed);
+            for (double hair_length : {10.0, 0.05 * rows}) {
+              tessellator.tessellate(grid, columns, rows, hair_length, mesh);
+              for (int c = 0; c < 2; ++c) {
+                std::uint64_t hash = 14695981039346656037ULL;
+                look.colorize(mesh, colours[c], static_cast<std::uint32_t>(seed * 7919), out);
+                hashBytes(hash, out.data(), out.size() * sizeof(Rgba));
+                look.stripeProfiles(mesh, 12345U, profiles);
+                look.colorize(mesh, colours[c], profiles, out);
+                hashBytes(hash, out.data(), out.size() * sizeof(Rgba));
+                look.shade(mesh, colours[c], out);
+                hashBytes(hash, out.data(), out.size() * sizeof(Rgba));
+                std::printf("look %d, level %d x %d, %d x %d, seed %d, length %.2f, colour %d: %016llx\n", l,
+                            level.samples_across, level.samples_along, columns, rows, seed, hair_length, c,
+                            static_cast<unsigned long long>(hash));
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  return 0;
+}
