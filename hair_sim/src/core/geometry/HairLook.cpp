@@ -66,6 +66,15 @@ HAIR_LOOK_INLINE double smoothstep(double x) {
   return x * x * (3.0 - 2.0 * x);
 }
 
+/// HairLook::rootFactor and tipFade with their parameters.
+HAIR_LOOK_INLINE double rootFactorOf(double v, double root_darkening, double root_length) {
+  return 1.0 - root_darkening * (1.0 - smoothstep(v / root_length));
+}
+HAIR_LOOK_INLINE double tipFadeOf(double v, double tip_fade_start) {
+  // Before tip_fade_start the smoothstep's argument is clamped to 0: exactly 1 (no branch on the data).
+  return 1.0 - smoothstep((v - tip_fade_start) / (1.0 - tip_fade_start));
+}
+
 HAIR_LOOK_INLINE float clampChannel(double value) {
   return static_cast<float>(maxOf(0.0, minOf(1.0, value)));
 }
@@ -163,20 +172,16 @@ HAIR_LOOK_INLINE void lightColumnBody(const ColumnLighting& in) {
     specularTerms(tl, tv, sin_l, m, in.specular_exponent, highlight);
     for (int k = 0; k < m; ++k) {
       const double light = in.ambient + (1.0 - in.ambient) * sin_l[k];
-      // rootFactor(v[k])
-      const double root = 1.0 - in.root_darkening * (1.0 - smoothstep(v[k] / in.root_length));
-      const double shade = light * in.stripe_brightness * root;
+      const double shade =
+          light * in.stripe_brightness * rootFactorOf(v[k], in.root_darkening, in.root_length);
       const double h = in.specular_strength * highlight[k];
       r[k] = clampChannel(in.base_r * shade + h);
       g[k] = clampChannel(in.base_g * shade + h);
       b[k] = clampChannel(in.base_b * shade + h);
     }
     if (in.pattern) {
-      for (int k = 0; k < m; ++k) {
-        // tipFade(v[k])
-        const double fade = 1.0 - smoothstep((v[k] - in.tip_fade_start) / (1.0 - in.tip_fade_start));
-        a[k] = clampChannel(in.base_a * in.stripe_alpha * fade);
-      }
+      for (int k = 0; k < m; ++k)
+        a[k] = clampChannel(in.base_a * in.stripe_alpha * tipFadeOf(v[k], in.tip_fade_start));
     } else {
       for (int k = 0; k < m; ++k) a[k] = clampChannel(in.base_a);
     }
@@ -253,14 +258,10 @@ double HairLook::stripeProfile(double u, std::uint32_t strip_seed, double width)
   return std::max(0.0, std::min(1.0, sum));
 }
 
-double HairLook::tipFade(double v) const {
-  // Before tip_fade_start the smoothstep's argument is clamped to 0: exactly 1 (no branch on the data).
-  const double start = parameters_.tip_fade_start;
-  return 1.0 - smoothstep((v - start) / (1.0 - start));
-}
+double HairLook::tipFade(double v) const { return tipFadeOf(v, parameters_.tip_fade_start); }
 
 double HairLook::rootFactor(double v) const {
-  return 1.0 - parameters_.root_darkening * (1.0 - smoothstep(v / parameters_.root_length));
+  return rootFactorOf(v, parameters_.root_darkening, parameters_.root_length);
 }
 
 void HairLook::colorize(const StripMesh& mesh, const Rgba& base, std::uint32_t strip_seed,
