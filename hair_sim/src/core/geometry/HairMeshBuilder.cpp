@@ -9,6 +9,9 @@
 namespace hair_sim {
 
 namespace {
+/// Bodies whose test the bounding box of a strip's vertices can skip (the others are always tested).
+constexpr std::size_t kMaxBoxedBodies = 64;
+
 LevelOfDetail chooseLevel(const Hairstyle& style, const HairMeshOptions& o) {
   if (o.max_triangles <= 0) return o.level_of_detail;
   std::vector<StripShape> shapes;
@@ -104,13 +107,32 @@ void HairMeshBuilder::buildStrips(std::size_t first_strip, std::size_t last_stri
       Vec3& p = mesh.positions[static_cast<std::size_t>(mesh.index(iu, 0))];
       p = scalp.radialProjection(p);
     }
-    for (std::size_t k = static_cast<std::size_t>(mesh.n_u); k < mesh.positions.size(); ++k) {
+    // Vertices out of the bodies (the root edge excepted). A body whose reach misses the box around the
+    // vertices holds none of them: its test is skipped (the box's distance bounds every vertex's, rounding
+    // included), unless a projection out of an earlier body has moved the vertex.
+    const std::size_t first_tested = static_cast<std::size_t>(mesh.n_u);
+    Vec3 box_lo = mesh.positions[first_tested], box_hi = box_lo;
+    for (std::size_t k = first_tested + 1; k < mesh.positions.size(); ++k) {
+      box_lo = box_lo.cwiseMin(mesh.positions[k]);
+      box_hi = box_hi.cwiseMax(mesh.positions[k]);
+    }
+    bool near[kMaxBoxedBodies];
+    const std::size_t boxed = std::min(bodies.size(), kMaxBoxedBodies);
+    for (std::size_t b = 0; b < boxed; ++b) {
+      const Vec3& c = bodies[b].center();
+      const Vec3 gap = (box_lo - c).cwiseMax(c - box_hi).cwiseMax(0.0);  // per axis: 0 when c is within
+      near[b] = gap.squaredNorm() <= body_reach2_[b];
+    }
+    for (std::size_t k = first_tested; k < mesh.positions.size(); ++k) {
       Vec3& p = mesh.positions[k];
+      bool moved = false;
       for (std::size_t b = 0; b < bodies.size(); ++b) {
+        if (b < boxed && !near[b] && !moved) continue;
         const Ellipsoid& e = bodies[b];
         if ((p - e.center()).squaredNorm() > body_reach2_[b] || e.implicitValue(p) >= 0.0) continue;
         const Ellipsoid::ClosestPoint cp = e.closestPoint(p);
         p = cp.point + 1e-6 * cp.normal;
+        moved = true;
         ++projected;
       }
     }
