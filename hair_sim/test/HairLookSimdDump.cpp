@@ -9,38 +9,13 @@
 #include <cstdio>
 #include <vector>
 
+#include "SimdDump.hpp"
 #include "hair_sim/core/geometry/HairLook.hpp"
 #include "hair_sim/core/geometry/Tessellator.hpp"
 
-namespace {
-
 using namespace hair_sim;
-
-/// FNV-1a over raw bytes.
-void hashBytes(std::uint64_t& hash, const void* data, std::size_t size) {
-  const unsigned char* bytes = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < size; ++i) {
-    hash = (hash ^ bytes[i]) * 1099511628211ULL;
-  }
-}
-
-/// A curved strip turning through every orientation to the light, deterministic; `seed` varies it.
-std::vector<Vec3> curvedGrid(int columns, int rows, int seed) {
-  std::vector<Vec3> points(static_cast<std::size_t>(columns * rows));
-  for (int c = 0; c < columns; ++c) {
-    Vec3 p(0.001 * std::sin(seed + c), 0.015 * c, 0.001 * std::cos(3 * seed + c));
-    double pitch = 0.3 + seed;
-    for (int r = 0; r < rows; ++r) {
-      points[static_cast<std::size_t>(r * columns + c)] = p;
-      pitch += 0.9 * std::sin(1.7 * r + seed) + 0.05 * c;
-      const double yaw = 1.2 * std::cos(2.3 * r + seed + c);
-      p += 0.08 * Vec3(std::cos(pitch) * std::cos(yaw), std::sin(yaw), -std::sin(pitch)).normalized();
-    }
-  }
-  return points;
-}
-
-}  // namespace
+using simd_dump::curvedGrid;
+using simd_dump::hashBytes;
 
 int main() {
   HairLookParameters fractional;
@@ -67,7 +42,7 @@ int main() {
       for (int columns = 2; columns <= 4; ++columns) {
         for (int rows = 4; rows <= 20; rows += 8) {
           for (int seed = 0; seed < 3; ++seed) {
-            const std::vector<Vec3> grid = curvedGrid(columns, rows, seed);
+            const std::vector<Vec3> grid = curvedGrid(columns, rows, seed, 0.3 + seed, 0.9, 1.2);
             for (double hair_length : {10.0, 0.05 * rows}) {
               tessellator.tessellate(grid, columns, rows, hair_length, mesh);
               for (int c = 0; c < 2; ++c) {

@@ -142,51 +142,54 @@ HAIR_LOOK_INLINE void specularTerms(const double* tl, const double* tv, const do
 
 /// What HairLook::colour needs for the lighting of one vertex column.
 struct ColumnLighting {
-  const Vec3* tangents;
-  const float* v_param;
+  const StripMesh* mesh;
   Rgba* colours;
-  int n_u, n_v, iu;
-  Vec3 light, view;
-  double ambient, specular_strength, specular_exponent;
-  double root_darkening, root_length, tip_fade_start;
-  double stripe_alpha, stripe_brightness;
+  const HairLookParameters* look;
+  Vec3 light, view;  ///< unit
   double base_r, base_g, base_b, base_a;
   bool pattern;
+  int iu;
+  double stripe_alpha, stripe_brightness;
 };
 
 /// One vertex column of HairLook::colour in chunks, each step of the lighting a loop over the chunk that the
 /// compiler vectorises (HairLook.cpp: -O3, no errno, no trapping math): per vertex the same operations as
 /// diffuse(), specular(), rootFactor() and tipFade().
 HAIR_LOOK_INLINE void lightColumnBody(const ColumnLighting& in) {
-  for (int iv0 = 0; iv0 < in.n_v; iv0 += kChunk) {
-    const int m = std::min(kChunk, in.n_v - iv0);
+  const Vec3* tangents = in.mesh->tangents.data();
+  const float* v_param = in.mesh->v_param.data();
+  const int n_u = in.mesh->n_u, n_v = in.mesh->n_v, iu = in.iu;
+  const HairLookParameters& look = *in.look;
+  const double ambient = look.ambient, strength = look.specular_strength;
+  for (int iv0 = 0; iv0 < n_v; iv0 += kChunk) {
+    const int m = std::min(kChunk, n_v - iv0);
     double tl[kChunk], tv[kChunk], v[kChunk], sin_l[kChunk], highlight[kChunk];
     float r[kChunk], g[kChunk], b[kChunk], a[kChunk];
     for (int k = 0; k < m; ++k) {
-      const std::size_t index = static_cast<std::size_t>(iv0 + k) * in.n_u + in.iu;
-      tl[k] = in.tangents[index].dot(in.light);
-      tv[k] = in.tangents[index].dot(in.view);
-      v[k] = in.v_param[index];
+      const std::size_t index = static_cast<std::size_t>(iv0 + k) * n_u + iu;
+      tl[k] = tangents[index].dot(in.light);
+      tv[k] = tangents[index].dot(in.view);
+      v[k] = v_param[index];
     }
     for (int k = 0; k < m; ++k) sin_l[k] = sine(tl[k]);
-    specularTerms(tl, tv, sin_l, m, in.specular_exponent, highlight);
+    specularTerms(tl, tv, sin_l, m, look.specular_exponent, highlight);
     for (int k = 0; k < m; ++k) {
-      const double light = in.ambient + (1.0 - in.ambient) * sin_l[k];
+      const double light = ambient + (1.0 - ambient) * sin_l[k];
       const double shade =
-          light * in.stripe_brightness * rootFactorOf(v[k], in.root_darkening, in.root_length);
-      const double h = in.specular_strength * highlight[k];
+          light * in.stripe_brightness * rootFactorOf(v[k], look.root_darkening, look.root_length);
+      const double h = strength * highlight[k];
       r[k] = clampChannel(in.base_r * shade + h);
       g[k] = clampChannel(in.base_g * shade + h);
       b[k] = clampChannel(in.base_b * shade + h);
     }
     if (in.pattern) {
       for (int k = 0; k < m; ++k)
-        a[k] = clampChannel(in.base_a * in.stripe_alpha * tipFadeOf(v[k], in.tip_fade_start));
+        a[k] = clampChannel(in.base_a * in.stripe_alpha * tipFadeOf(v[k], look.tip_fade_start));
     } else {
       for (int k = 0; k < m; ++k) a[k] = clampChannel(in.base_a);
     }
     for (int k = 0; k < m; ++k)
-      in.colours[static_cast<std::size_t>(iv0 + k) * in.n_u + in.iu] = Rgba{r[k], g[k], b[k], a[k]};
+      in.colours[static_cast<std::size_t>(iv0 + k) * n_u + iu] = Rgba{r[k], g[k], b[k], a[k]};
   }
 }
 
@@ -316,35 +319,15 @@ void HairLook::colour(const StripMesh& mesh, const Rgba& base, std::uint32_t str
   const double base_b = clampChannel(base.b);
   const double base_a = clampChannel(base.a);
   const double contrast = parameters_.stripe_contrast;
-  const double ambient = parameters_.ambient;
+  ColumnLighting column{&mesh,  colours.data(), &parameters_, light_, view_, base_r, base_g,
+                        base_b, base_a,         pattern,      0,      1.0,   1.0};
   for (int iu = 0; iu < mesh.n_u; ++iu) {
     const double profile = !pattern              ? 1.0
                            : profiles != nullptr ? profiles[iu]
                                                  : columnProfile(mesh, iu, strip_seed);
-    const double stripe_alpha = 1.0 - contrast * (1.0 - profile);
-    const double stripe_brightness = 1.0 - 0.5 * contrast * (1.0 - profile);
-    ColumnLighting column;
-    column.tangents = mesh.tangents.data();
-    column.v_param = mesh.v_param.data();
-    column.colours = colours.data();
-    column.n_u = mesh.n_u;
-    column.n_v = mesh.n_v;
     column.iu = iu;
-    column.light = light_;
-    column.view = view_;
-    column.ambient = ambient;
-    column.specular_strength = parameters_.specular_strength;
-    column.specular_exponent = parameters_.specular_exponent;
-    column.root_darkening = parameters_.root_darkening;
-    column.root_length = parameters_.root_length;
-    column.tip_fade_start = parameters_.tip_fade_start;
-    column.stripe_alpha = stripe_alpha;
-    column.stripe_brightness = stripe_brightness;
-    column.base_r = base_r;
-    column.base_g = base_g;
-    column.base_b = base_b;
-    column.base_a = base_a;
-    column.pattern = pattern;
+    column.stripe_alpha = 1.0 - contrast * (1.0 - profile);
+    column.stripe_brightness = 1.0 - 0.5 * contrast * (1.0 - profile);
 #if defined(HAIR_LOOK_AVX2)
     if (useAvx2()) {
       lightColumnAvx2(column);
