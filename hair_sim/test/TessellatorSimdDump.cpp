@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #include "SimdDump.hpp"
@@ -37,6 +38,29 @@ int main() {
                         static_cast<unsigned long long>(hash));
           }
         }
+      }
+    }
+  }
+  // Finite control points near the largest double: a segment overflows to infinity (the walk crosses the
+  // hair length there) and a later one is NaN (inf - inf). Every path clips at the infinite segment.
+  const double huge = std::numeric_limits<double>::max();
+  for (int samples_along = 1; samples_along <= 8; ++samples_along) {
+    tessellator.setLevelOfDetail(LevelOfDetail{1, samples_along});
+    for (int rows = 4; rows <= 9; ++rows) {
+      for (int columns = 2; columns <= 4; ++columns) {
+        std::vector<Vec3> grid(static_cast<std::size_t>(columns * rows));
+        for (int r = 0; r < rows; ++r) {
+          for (int c = 0; c < columns; ++c) {
+            grid[static_cast<std::size_t>(r * columns + c)] =
+                Vec3(huge * (1.0 - 1e-16 * ((r * 7 + c) % 3)), 0.01 * r + 0.001 * c, 0.0);
+          }
+        }
+        tessellator.tessellate(grid, columns, rows, 0.5, mesh);
+        std::uint64_t hash = 14695981039346656037ULL;
+        hashBytes(hash, mesh.positions.data(), mesh.positions.size() * sizeof(Vec3));
+        hashBytes(hash, mesh.v_param.data(), mesh.v_param.size() * sizeof(float));
+        std::printf("overflow, level 1 x %d, %d x %d: %016llx\n", samples_along, columns, rows,
+                    static_cast<unsigned long long>(hash));
       }
     }
   }

@@ -1,6 +1,7 @@
 #include "hair_sim/core/geometry/HairMeshBuilder.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -109,19 +110,23 @@ void HairMeshBuilder::buildStrips(std::size_t first_strip, std::size_t last_stri
     }
     // Vertices out of the bodies (the root edge excepted). A body whose reach misses the box around the
     // vertices holds none of them: its test is skipped (the box's distance bounds every vertex's, rounding
-    // included), unless a projection out of an earlier body has moved the vertex.
+    // included), unless a projection out of an earlier body has moved the vertex. A non-finite vertex (the
+    // box would leave it out) has every body tested, as without the box.
     const std::size_t first_tested = static_cast<std::size_t>(mesh.n_u);
     Vec3 box_lo = mesh.positions[first_tested], box_hi = box_lo;
-    for (std::size_t k = first_tested + 1; k < mesh.positions.size(); ++k) {
-      box_lo = box_lo.cwiseMin(mesh.positions[k]);
-      box_hi = box_hi.cwiseMax(mesh.positions[k]);
+    double sum = 0.0;  // not finite when a coordinate is not (or, harmlessly, when the sum overflows)
+    for (std::size_t k = first_tested; k < mesh.positions.size(); ++k) {
+      const Vec3& p = mesh.positions[k];
+      box_lo = box_lo.cwiseMin(p);
+      box_hi = box_hi.cwiseMax(p);
+      sum += p.x() + p.y() + p.z();
     }
     bool near[kMaxBoxedBodies];
-    const std::size_t boxed = std::min(bodies.size(), kMaxBoxedBodies);
+    const std::size_t boxed = std::isfinite(sum) ? std::min(bodies.size(), kMaxBoxedBodies) : 0;
     for (std::size_t b = 0; b < boxed; ++b) {
       const Vec3& c = bodies[b].center();
       const Vec3 gap = (box_lo - c).cwiseMax(c - box_hi).cwiseMax(0.0);  // per axis: 0 when c is within
-      near[b] = gap.squaredNorm() <= body_reach2_[b];
+      near[b] = !(gap.squaredNorm() > body_reach2_[b]);                  // as the vertex's test below
     }
     for (std::size_t k = first_tested; k < mesh.positions.size(); ++k) {
       Vec3& p = mesh.positions[k];

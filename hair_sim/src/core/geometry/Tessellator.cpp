@@ -261,8 +261,9 @@ void normalizeFrames(Vec3* normals, Vec3* tangents, std::size_t count) {
   }
 }
 
-/// True when none of the `count` doubles is infinite or NaN (exponent bits all ones). Integer operations
-/// only, so the compiler vectorises the loop.
+/// True when none of the `count` doubles is infinite or NaN (exponent bits all ones). Integer operations and
+/// no branch: a cheap loop over the coordinates (GCC and clang vectorise it only where the target has 64-bit
+/// integer comparisons, e.g. with AVX2; on the x86-64 baseline it stays scalar).
 bool allFinite(const double* values, std::size_t count) {
   std::uint64_t non_finite = 0;
   for (std::size_t i = 0; i < count; ++i) {
@@ -738,17 +739,20 @@ HAIR_SIM_AVX2_TARGET void cachedColumnQuads(const double* curve, const double* c
     const __m256d sy = p.y - _mm256_shuffle_pd(_mm256_permute2f128_pd(last_y, p.y, 0x21), p.y, 0x5);
     const __m256d sz = p.z - _mm256_shuffle_pd(_mm256_permute2f128_pd(last_z, p.z, 0x21), p.z, 0x5);
     const __m256d segments = _mm256_sqrt_pd(sx * sx + sy * sy + sz * sz);
-    // The walked length after each lane, added in lane order (as the SSE2 and scalar kernels do). Lanes past
-    // `count` repeat the last sample (zero segment). Segments are >= 0, so the walked length never decreases
-    // and the quad reaches the hair length exactly when its last lane does.
+    // The walked length after each lane, added in lane order (as the SSE2 and scalar kernels do), then one
+    // comparison of the real lanes (< count) with the hair length: the first lane over it is where the
+    // column is clipped, as lane by lane (a NaN walk, from coordinates that overflow, never crosses).
     const __m128d low = _mm256_castpd256_pd128(segments);
     const __m128d high = _mm256_extractf128_pd(segments, 1);
     const double walked0 = length + _mm_cvtsd_f64(low);
     const double walked1 = walked0 + _mm_cvtsd_f64(_mm_unpackhi_pd(low, low));
     const double walked2 = walked1 + _mm_cvtsd_f64(high);
     const double walked3 = walked2 + _mm_cvtsd_f64(_mm_unpackhi_pd(high, high));
+    const __m256d walked_quad = _mm256_set_pd(walked3, walked2, walked1, walked0);
+    const int over = _mm256_movemask_pd(_mm256_cmp_pd(walked_quad, _mm256_set1_pd(hair_length), _CMP_GT_OQ)) &
+                     ((1 << count) - 1);
     const std::size_t a = static_cast<std::size_t>(iv) * n_u + iu;
-    if (!(walked3 > hair_length)) {
+    if (over == 0) {
       storeQuadLanes(p, positions + 3 * a, vertex_stride, count);
       Quad3 n;
       Quad3 t;
@@ -763,10 +767,9 @@ HAIR_SIM_AVX2_TARGET void cachedColumnQuads(const double* curve, const double* c
           normalizeFrame(normals + offset, tangents + offset);
         }
       }
-      const __m128 parameter =
-          _mm256_cvtpd_ps(_mm256_set_pd(walked3, walked2, walked1, walked0) * _mm256_set1_pd(inverse_length));
+      const __m128 parameter = _mm256_cvtpd_ps(walked_quad * _mm256_set1_pd(inverse_length));
       storeFloatLanes(parameter, v_param + a, static_cast<std::size_t>(n_u), count);
-      length = walked3;
+      length = count == 4 ? walked3 : (count == 3 ? walked2 : (count == 2 ? walked1 : walked0));
       last_x = p.x;
       last_y = p.y;
       last_z = p.z;
@@ -774,10 +777,7 @@ HAIR_SIM_AVX2_TARGET void cachedColumnQuads(const double* curve, const double* c
     }
     // The hair length is reached in this quad (once per column at most): finish in scalar code.
     const double walked[4] = {walked0, walked1, walked2, walked3};
-    int crossing = 0;
-    while (crossing < count - 1 && !(walked[crossing] > hair_length)) {
-      ++crossing;
-    }
+    const int crossing = __builtin_ctz(static_cast<unsigned>(over));
     alignas(32) double segment[4];
     _mm256_store_pd(segment, segments);
     alignas(32) double lanes[9][4];
