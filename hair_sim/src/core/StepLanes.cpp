@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "RotationSeries.hpp"
+#include "SimdDispatch.hpp"
 #include "hair_sim/core/Simulator.hpp"
 #include "hair_sim/core/events/EventSchedule.hpp"
 
@@ -10,9 +11,6 @@
 // the few lanes that need atan2 or sin/cos (large angles) are finished by the scalar functions in between.
 // This file is compiled with -fno-math-errno (sqrt vectorises) and -ffp-contract=off (no FMA: the AVX2 and
 // baseline code give the same bits).
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(HAIR_SIM_NO_AVX2)
-#define HAIR_SIM_LANES_AVX2 1
-#endif
 
 namespace hair_sim {
 namespace lanes {
@@ -20,12 +18,6 @@ namespace lanes {
 namespace {
 
 constexpr int W = kLanes;
-
-#if defined(__GNUC__)
-#define HAIR_SIM_ALWAYS_INLINE inline __attribute__((always_inline))
-#else
-#define HAIR_SIM_ALWAYS_INLINE inline
-#endif
 
 // N lanes of doubles (V) and their masks (M, 0 or -1 per lane) are GCC vector types: every operation works
 // on all lanes at once. The AVX2 code takes N = 4 (one ymm register), the baseline code N = 2 (one xmm),
@@ -373,7 +365,7 @@ void stepBlockBaseline(BlockJob& job) {
   for (int l0 = 0; l0 < W; l0 += 2) blockBody<2>(job, l0);
 }
 
-#if defined(HAIR_SIM_LANES_AVX2)
+#if defined(HAIR_SIM_AVX2_DISPATCH)
 __attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) {
   static_assert(W % 4 == 0, "blocks of whole AVX2 vectors");
   for (int l0 = 0; l0 < W; l0 += 4) blockBody<4>(job, l0);
@@ -382,20 +374,10 @@ __attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) {
 
 }  // namespace
 
-bool haveAvx2() {
-#if defined(HAIR_SIM_LANES_AVX2)
-  static const bool has = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") != 0;
-  }();
-  return has;
-#else
-  return false;
-#endif
-}
+bool haveAvx2() { return cpuHasAvx2(); }
 
 void stepBlock(BlockJob& job, bool baseline_only) {
-#if defined(HAIR_SIM_LANES_AVX2)
+#if defined(HAIR_SIM_AVX2_DISPATCH)
   if (!baseline_only && haveAvx2()) {
     stepBlockAvx2(job);
     return;

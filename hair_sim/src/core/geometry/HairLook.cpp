@@ -5,17 +5,10 @@
 #include <stdexcept>
 #include <string>
 
-// The lighting of a vertex column is compiled twice, for the x86-64 baseline and for AVX2 (chosen at run
-// time when the CPU has it; -DHAIR_SIM_NO_AVX2 leaves the baseline alone): the same operations in the same
-// order without FMA contraction, so both give the same bits (test HairLookSimdPathsBitIdentical).
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(HAIR_SIM_NO_AVX2)
-#define HAIR_LOOK_AVX2 1
-#endif
-#if defined(__GNUC__) || defined(__clang__)
-#define HAIR_LOOK_INLINE inline __attribute__((always_inline))
-#else
-#define HAIR_LOOK_INLINE inline
-#endif
+#include "../SimdDispatch.hpp"
+
+// The lighting of a vertex column is compiled for the baseline and for AVX2 (SimdDispatch.hpp; test
+// HairLookSimdPathsBitIdentical).
 
 namespace hair_sim {
 
@@ -58,24 +51,24 @@ double bump(double t) {
 }
 
 /// std::min(a, b) and std::max(a, b) by value (the same results), for the vectorised loops.
-HAIR_LOOK_INLINE double minOf(double a, double b) { return b < a ? b : a; }
-HAIR_LOOK_INLINE double maxOf(double a, double b) { return a < b ? b : a; }
+HAIR_SIM_ALWAYS_INLINE double minOf(double a, double b) { return b < a ? b : a; }
+HAIR_SIM_ALWAYS_INLINE double maxOf(double a, double b) { return a < b ? b : a; }
 
-HAIR_LOOK_INLINE double smoothstep(double x) {
+HAIR_SIM_ALWAYS_INLINE double smoothstep(double x) {
   x = maxOf(0.0, minOf(1.0, x));
   return x * x * (3.0 - 2.0 * x);
 }
 
 /// HairLook::rootFactor and tipFade with their parameters.
-HAIR_LOOK_INLINE double rootFactorOf(double v, double root_darkening, double root_length) {
+HAIR_SIM_ALWAYS_INLINE double rootFactorOf(double v, double root_darkening, double root_length) {
   return 1.0 - root_darkening * (1.0 - smoothstep(v / root_length));
 }
-HAIR_LOOK_INLINE double tipFadeOf(double v, double tip_fade_start) {
+HAIR_SIM_ALWAYS_INLINE double tipFadeOf(double v, double tip_fade_start) {
   // Before tip_fade_start the smoothstep's argument is clamped to 0: exactly 1 (no branch on the data).
   return 1.0 - smoothstep((v - tip_fade_start) / (1.0 - tip_fade_start));
 }
 
-HAIR_LOOK_INLINE float clampChannel(double value) {
+HAIR_SIM_ALWAYS_INLINE float clampChannel(double value) {
   return static_cast<float>(maxOf(0.0, minOf(1.0, value)));
 }
 
@@ -111,7 +104,7 @@ void checkMesh(const StripMesh& mesh, const char* where) {
 }
 
 /// sin of the angle whose cosine is `cosine` (|cosine| <= 1 up to rounding): sqrt(max(0, 1 - cosine^2)).
-HAIR_LOOK_INLINE double sine(double cosine) { return std::sqrt(maxOf(0.0, 1.0 - cosine * cosine)); }
+HAIR_SIM_ALWAYS_INLINE double sine(double cosine) { return std::sqrt(maxOf(0.0, 1.0 - cosine * cosine)); }
 
 /// Vertices per chunk of HairLook::colour's vectorised loops.
 constexpr int kChunk = 64;
@@ -121,8 +114,8 @@ constexpr int kChunk = 64;
 /// the power of 0 (no branch on the data). An integer exponent (the default 40) by repeated squaring: a few
 /// multiplications, within a few ulp of std::pow, which took 9 % of hair_sim_node's time with hair_markers
 /// subscribed (every vertex, every frame).
-HAIR_LOOK_INLINE void specularTerms(const double* tl, const double* tv, const double* sin_l, int m,
-                                    double exponent, double* out) {
+HAIR_SIM_ALWAYS_INLINE void specularTerms(const double* tl, const double* tv, const double* sin_l, int m,
+                                          double exponent, double* out) {
   double power[kChunk];
   for (int k = 0; k < m; ++k) {
     const double raw = minOf(1.0, sin_l[k] * sine(tv[k]) - tl[k] * tv[k]);
@@ -155,7 +148,7 @@ struct ColumnLighting {
 /// One vertex column of HairLook::colour in chunks, each step of the lighting a loop over the chunk that the
 /// compiler vectorises (HairLook.cpp: -O3, no errno, no trapping math): per vertex the same operations as
 /// diffuse(), specular(), rootFactor() and tipFade().
-HAIR_LOOK_INLINE void lightColumnBody(const ColumnLighting& in) {
+HAIR_SIM_ALWAYS_INLINE void lightColumnBody(const ColumnLighting& in) {
   const Vec3* tangents = in.mesh->tangents.data();
   const float* v_param = in.mesh->v_param.data();
   const int n_u = in.mesh->n_u, n_v = in.mesh->n_v, iu = in.iu;
@@ -195,16 +188,9 @@ HAIR_LOOK_INLINE void lightColumnBody(const ColumnLighting& in) {
 
 void lightColumnBaseline(const ColumnLighting& in) { lightColumnBody(in); }
 
-#if defined(HAIR_LOOK_AVX2)
+#if defined(HAIR_SIM_AVX2_DISPATCH)
 __attribute__((target("avx2"))) void lightColumnAvx2(const ColumnLighting& in) { lightColumnBody(in); }
 
-bool useAvx2() {
-  static const bool has = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") != 0;
-  }();
-  return has;
-}
 #endif
 
 }  // namespace
@@ -319,6 +305,10 @@ void HairLook::colour(const StripMesh& mesh, const Rgba& base, std::uint32_t str
   const double base_b = clampChannel(base.b);
   const double base_a = clampChannel(base.a);
   const double contrast = parameters_.stripe_contrast;
+  void (*lightColumn)(const ColumnLighting&) = lightColumnBaseline;
+#if defined(HAIR_SIM_AVX2_DISPATCH)
+  if (cpuHasAvx2()) lightColumn = lightColumnAvx2;
+#endif
   ColumnLighting column{&mesh,  colours.data(), &parameters_, light_, view_, base_r, base_g,
                         base_b, base_a,         pattern,      0,      1.0,   1.0};
   for (int iu = 0; iu < mesh.n_u; ++iu) {
@@ -328,13 +318,7 @@ void HairLook::colour(const StripMesh& mesh, const Rgba& base, std::uint32_t str
     column.iu = iu;
     column.stripe_alpha = 1.0 - contrast * (1.0 - profile);
     column.stripe_brightness = 1.0 - 0.5 * contrast * (1.0 - profile);
-#if defined(HAIR_LOOK_AVX2)
-    if (useAvx2()) {
-      lightColumnAvx2(column);
-      continue;
-    }
-#endif
-    lightColumnBaseline(column);
+    lightColumn(column);
   }
 }
 

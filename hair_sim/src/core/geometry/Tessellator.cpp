@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "../SimdDispatch.hpp"
+
 // SSE2 (baseline on x86-64) kernels for the CachedBasis method and the frame normalisation; the portable
 // scalar code below is used elsewhere, or everywhere with -DHAIR_SIM_NO_SIMD (both paths are tested).
 #if defined(__SSE2__) && !defined(HAIR_SIM_NO_SIMD)
@@ -15,7 +17,7 @@
 #include <xmmintrin.h>
 // AVX2 kernels compiled for that target only and chosen at run time when the CPU has it (-DHAIR_SIM_NO_AVX2
 // keeps the SSE2 kernels). Both give bit-identical results: same operations in the same order, no FMA.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(HAIR_SIM_NO_AVX2)
+#if defined(HAIR_SIM_AVX2_DISPATCH)
 #define HAIR_SIM_AVX2 1
 #define HAIR_SIM_AVX2_TARGET __attribute__((target("avx2")))
 #include <immintrin.h>
@@ -564,13 +566,6 @@ void cachedColumnPairs(const double* curve, const double* curve_dv, int stride, 
 #endif
 
 #if defined(HAIR_SIM_AVX2)
-bool cpuHasAvx2() {
-  static const bool has = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") != 0;
-  }();
-  return has;
-}
 
 /// Four 3D vectors as x, y, z lane quads (lane l: sample iv + l).
 struct Quad3 {
