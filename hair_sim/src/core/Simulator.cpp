@@ -177,6 +177,7 @@ void Simulator::buildLanes() {
     strip_last_block_[static_cast<std::size_t>(chains[ch].first)] = static_cast<int>(ch / W);
   block_flags_.assign(blocks * W, 0);
   const std::size_t n = positions_.size();
+  lane_flag_.assign(n, lanes::kPointFull);
   new_position_.assign(n, Vec3::Zero());
   new_direction_.assign(n, Vec3::UnitZ());
   new_rate_.assign(n, Vec3::Zero());
@@ -233,6 +234,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   job.out_rate = new_rate_.data();
   job.out_velocity = new_velocity_.data();
   job.out_mid = new_mid_.data();
+  job.out_flag = lane_flag_.data();
   job.body_count = static_cast<int>(nb);
   job.have_before = have_bodies_before_;
   job.turbulence = f.turbulent ? in.turbulence : nullptr;
@@ -244,7 +246,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   // One block of chains: reads only its own chains' state at the start of the substep, writes only their
   // new state and its flags (on any thread).
   auto runBlock = [&](std::size_t blk) {
-    if (block_margin_[blk] < 0) return;
+    if (block_margin_[blk] < 0) return;  // lane_flag_ keeps kPointFull there (buildLanes)
     lanes::BlockJob j = job;
     j.rows = block_rows_[blk];
     j.point = &lane_point_[blk * stride];
@@ -322,7 +324,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
             from, bp.same_strip ? std::max(sweepKey(bp.later), sweepKey(bp.earlier)) : sweepKey(bp.later));
     }
     if (from != kNoExact) {
-      stepStrip(in, f, si, strip_offset_[si], tally, from);
+      stepStrip(in, f, si, strip_offset_[si], tally, from, true);
       ++exact_strips_;
       continue;
     }
@@ -1244,7 +1246,7 @@ void Simulator::step(const StepInputs& in) {
 }
 
 void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset,
-                          StepTally& tally, int from) {
+                          StepTally& tally, int from, bool from_lanes) {
   const double dt = f.dt, rho = f.rho, k = f.k, gamma = f.gamma, drag = f.drag;
   const double cos_max_bend = f.cos_max_bend, k_c = f.k_c, c_c = f.c_c;
   const Mat3& Rt = f.Rt;
@@ -1269,22 +1271,88 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
   // The within-strip band (stripOutsideBand), checked as the sweep places the later point of each pair.
   const bool check_band = params_.springs_within_strips;
   bool outside_band = false;
+  // rowOutsideBand's test for the pairs of point i whose other point is already in place.
+  auto checkBand = [&](std::size_t i) {
+    if (!check_band || outside_band) return;
+    for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
+      const double rest = partner_rest_[static_cast<std::size_t>(q)];
+      if (rest <= 0.0) continue;  // between strips
+      const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
+      if (moved_in_step_[j] != steps_) continue;  // kept when j is placed
+      if (bandSide((positions_[i] - positions_[j]).norm(), rest, rest) != 0) {
+        outside_band = true;
+        return;
+      }
+    }
+  };
+  // Whether resolveCollisions' band projection would move the end `end` of point i (its first sweep's test).
+  const double lo_f = params_.spring_proximity_factor, hi_f = params_.spring_far_factor;
+  auto bandActs = [&](std::size_t i, const Vec3& end) {
+    for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
+      const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
+      if (moved_in_step_[j] != steps_) continue;
+      const double signed_rest = partner_rest_[static_cast<std::size_t>(q)];
+      const double rest = std::abs(signed_rest);
+      const double dist = (end - positions_[j]).norm();
+      if (dist < lo_f * rest || (signed_rest > 0.0 && dist > hi_f * rest)) return true;
+    }
+    return false;
+  };
   for (int c = 0; c < s.columns; ++c) {
-    Mat3 Q = Mat3::Identity();  // rotation of the parent segment from its styled frame
+    // Q: the rotation of row q_row's segment from its styled frame (the rest frame of row q_row + 1), brought
+    // down the column only where the exact step needs it.
+    Mat3 Q = Mat3::Identity();
+    int q_row = 1;
     std::size_t parent = static_cast<std::size_t>(offset + s.index(0, c));
+    // Whether a point above in this column left the lanes' result (the rows below then see another pivot).
+    bool diverged = false;
     for (int r = 1; r < s.rows; ++r) {
       const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
-      if (c * s.rows + r < from) {
-        // Before the place the exact step takes over: the lanes' result, on which it would decide the same
-        // (nothing acted there). The start state is kept for relaxStrip.
-        const std::size_t local = i - static_cast<std::size_t>(offset);
+      const std::size_t local = i - static_cast<std::size_t>(offset);
+      const bool before_from = c * s.rows + r < from;
+      if (before_from || (from_lanes && !diverged && !(lane_flag_[i] & lanes::kPointFull))) {
+        // The lanes' free step is this point's. Before the place the exact step takes over, it is taken as it
+        // is (nothing acted there). After it, a body in the way (kPointBodies) or a spring band that the
+        // places already final would have projected the end into is resolved from it, as the exact step
+        // would after its own free step; the start state is kept for relaxStrip.
         start_pos_[local] = positions_[i];
         start_dir_[local] = direction_[i];
         start_mid_[local] = previous_mid_[i];
-        tally.max_rate2 = std::max(tally.max_rate2, commitLanes(i));
-        if (r + 1 < s.rows) Q = minimalRotation(Q * styled_dir_[i], direction_[i]) * Q;
+        const Vec3& free_next = new_direction_[i];
+        const Vec3& pivot = positions_[parent];
+        const double d = length_[i];
+        if (before_from || (!(lane_flag_[i] & lanes::kPointBodies) && !bandActs(i, new_position_[i]))) {
+          tally.max_rate2 = std::max(tally.max_rate2, commitLanes(i));
+          if (!before_from) checkBand(i);
+          parent = i;
+          continue;
+        }
+        prepareBodies(pivot, d, positions_[i], bodies_now, bodies_before);
+        const Vec3 next =
+            resolveCollisions(static_cast<int>(i), pivot, d, free_next, bodies_now, bodies_before);
+        countPenetration(pivot + d * next, bodies_now, tally);
+        if (next == free_next) {
+          tally.max_rate2 = std::max(tally.max_rate2, commitLanes(i));
+        } else {
+          const Vec3 w = rotationVectorBetween(direction_[i], next);
+          tally.max_rate2 = std::max(tally.max_rate2, w.squaredNorm());
+          rate_[i] = w;
+          direction_[i] = next;
+          positions_[i] = pivot + d * next;
+          moved_in_step_[i] = steps_;
+          const Vec3 mid_next = pivot + 0.5 * d * next;
+          velocity_[i] = (mid_next - previous_mid_[i]) / dt;
+          previous_mid_[i] = mid_next;
+          diverged = true;
+        }
+        checkBand(i);
         parent = i;
         continue;
+      }
+      diverged = true;  // the exact step's own rounding from here down the column
+      for (; q_row < r; ++q_row) {
+        const std::size_t above = static_cast<std::size_t>(offset + s.index(q_row, c));
+        Q = minimalRotation(Q * styled_dir_[above], direction_[above]) * Q;
       }
       const double d = length_[i];
       const double inv_i = inv_inertia_[i];
@@ -1292,7 +1360,6 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       const Vec3 n = direction_[i];
       const Vec3 mid = pivot + 0.5 * d * n;
       const Vec3& v = velocity_[i];  // midpoint velocity relative to the head over the last substep
-      const std::size_t local = i - static_cast<std::size_t>(offset);
       start_pos_[local] = positions_[i];
       start_dir_[local] = n;
       start_mid_[local] = previous_mid_[i];
@@ -1337,15 +1404,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       }
       if (!bodies_now.empty() || partner_start_[i + 1] > partner_start_[i]) {
         next = resolveCollisions(static_cast<int>(i), pivot, d, next, bodies_now, bodies_before);
-        const Vec3 end = pivot + d * next;
-        bool inside = false;
-        for (std::size_t b : near_)
-          if (bodies_now[b].contains(end)) {
-            tally.max_penetration =
-                std::max(tally.max_penetration, -bodies_now[b].closestPoint(end).signed_distance);
-            inside = true;
-          }
-        if (inside) ++tally.penetrations;
+        countPenetration(pivot + d * next, bodies_now, tally);
       }
       // The rotation of this substep: w itself unless a limit or a constraint moved the end.
       if (next != free_next) w = rotationVectorBetween(n, next);
@@ -1354,23 +1413,10 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       direction_[i] = next;
       positions_[i] = pivot + d * next;
       moved_in_step_[i] = steps_;
-      if (check_band && !outside_band) {
-        // rowOutsideBand's test for the pairs whose other point is already in place.
-        for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
-          const double rest = partner_rest_[static_cast<std::size_t>(q)];
-          if (rest <= 0.0) continue;  // between strips
-          const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
-          if (moved_in_step_[j] != steps_) continue;  // kept when j is placed
-          if (bandSide((positions_[i] - positions_[j]).norm(), rest, rest) != 0) {
-            outside_band = true;
-            break;
-          }
-        }
-      }
+      checkBand(i);
       const Vec3 mid_next = pivot + 0.5 * d * next;
       velocity_[i] = (mid_next - previous_mid_[i]) / dt;
       previous_mid_[i] = mid_next;
-      if (r + 1 < s.rows) Q = minimalRotation(Q * styled_dir_[i], next) * Q;  // the next segment's rest frame
       parent = i;
     }
   }
@@ -1385,6 +1431,16 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
               std::max(tally.max_penetration, -e.closestPoint(positions_[i]).signed_distance);
     }
   }
+}
+
+void Simulator::countPenetration(const Vec3& end, const std::vector<Ellipsoid>& now, StepTally& tally) const {
+  bool inside = false;
+  for (std::size_t b : near_)
+    if (now[b].contains(end)) {
+      tally.max_penetration = std::max(tally.max_penetration, -now[b].closestPoint(end).signed_distance);
+      inside = true;
+    }
+  if (inside) ++tally.penetrations;
 }
 
 void Simulator::positionsWorld(const Iso3& head_pose, std::vector<Vec3>& out) const {

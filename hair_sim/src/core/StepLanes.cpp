@@ -281,7 +281,8 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
               n8 = r20 * q2 + r21 * q5 + r22 * q8;
       q0 = n0, q1 = n1, q2 = n2, q3 = n3, q4 = n4, q5 = n5, q6 = n6, q7 = n7, q8 = n8;
     }
-    flag = flag | (bad & active);
+    M full = bad & active;  // this row's own step again (kPointFull)
+    M hit = M{} & 0;        // the bodies in the way of this row's free step (kPointBodies)
 
     // Bodies: the quick reject of Simulator::prepareBodies, then for the bodies within reach its exact
     // tests: the end inside now (reaction constraint), or the new segment / the end's path over the
@@ -339,12 +340,16 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       const M cuts = ~pivot_inside & pathEnters(qx, qy, qz, qex, qey, qez);
       M swept = M{} & 0;
       if (job.have_before) swept = ~pivot_inside & pathEnters(bx1, by1, bz1, qex, qey, qez);
-      flag = flag | (reach & ~far2 & (inside_now | end_in | cuts | swept));
+      const M acting = reach & ~far2;
+      full = full | (acting & inside_now);
+      hit = hit | (acting & (end_in | cuts | swept));
     }
+    flag = flag | full | hit;
 
     // The state at the end of the substep; the new ends are the next row's pivots.
     const V midx = px + hd * kx, midy = py + hd * ky, midz = pz + hd * kz;
     const V velx = (midx - mx) / dt, vely = (midy - my) / dt, velz = (midz - mz) / dt;
+    const M code = (full & kPointFull) | (hit & ~full & kPointBodies);
     for (int l = 0; l < N; ++l) {
       const int i = pt[l];
       if (i < 0) continue;
@@ -353,6 +358,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       job.out_position[i] = Vec3(nex[l], ney[l], nez[l]);
       job.out_velocity[i] = Vec3(velx[l], vely[l], velz[l]);
       job.out_mid[i] = Vec3(midx[l], midy[l], midz[l]);
+      job.out_flag[i] = static_cast<unsigned char>(code[l]);
     }
     px = nex, py = ney, pz = nez;
     for (int l = 0; l < N; ++l)

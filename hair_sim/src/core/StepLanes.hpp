@@ -19,6 +19,13 @@ namespace lanes {
 /// Chains per block.
 constexpr int kLanes = 4;
 
+/// BlockJob::out_flag: the point's own step must be taken again by the exact step (a reaction constraint in
+/// force, a bend over the limit, a degenerate rest frame).
+constexpr unsigned char kPointFull = 2;
+/// BlockJob::out_flag: the point's new segment or its end's path is not clear of a body within reach: the
+/// exact step resolves the collision from the lanes' free step.
+constexpr unsigned char kPointBodies = 1;
+
 /// One block of kLanes chains. Arrays of Vec3 are the Simulator's per-point arrays (head frame).
 struct BlockJob {
   // Constants of the substep (head frame).
@@ -46,6 +53,8 @@ struct BlockJob {
   Vec3* out_rate = nullptr;
   Vec3* out_velocity = nullptr;
   Vec3* out_mid = nullptr;
+  /// Per point, what the exact step must do there (kPointFull, kPointBodies or 0: nothing).
+  unsigned char* out_flag = nullptr;
   /// Bodies for the block's thickness margin.
   const LaneBody* bodies = nullptr;
   int body_count = 0;

@@ -188,9 +188,14 @@ class Simulator {
   };
   /// The exact step of one strip (offset: its first point): the sweep over its columns, resolveCollisions
   /// for every segment, relaxStrip when its band does not hold. The places of the sweep before `from`
-  /// (column * rows + row) take the lanes' results (new_*_), the others the exact step.
+  /// (column * rows + row) take the lanes' results (new_*_), the others the exact step. With from_lanes
+  /// (the lanes ran for the strip), a place after `from` whose column kept the lanes' results above it
+  /// starts from the lanes' free step unless its lane_flag_ says kPointFull: committed as it is when no body
+  /// is in the way and no spring band would move it, else resolveCollisions from it.
   void stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset, StepTally& tally,
-                 int from = 0);
+                 int from = 0, bool from_lanes = false);
+  /// The penetration tally of a segment's end after resolveCollisions (the bodies near_ of its pivot).
+  void countPenetration(const Vec3& end, const std::vector<Ellipsoid>& now, StepTally& tally) const;
   /// The Lanes path: every block through lanes::stepBlock, the band of every spring pair checked at the new
   /// places, the strips that passed committed, the others through stepStrip in strip order.
   void stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally);
@@ -330,6 +335,7 @@ class Simulator {
   std::vector<lanes::LaneBody> lane_bodies_;  ///< [margin][body], this substep
   std::vector<int> strip_last_block_;         ///< per strip, the block of its last chain
   std::vector<int> block_flags_;              ///< [block][lane]: lanes::BlockJob::first_flagged_row
+  std::vector<unsigned char> lane_flag_;      ///< per point: lanes::BlockJob::out_flag
   std::unique_ptr<LaneWorkers> workers_;      ///< the helper threads (setThreads), or none
   static constexpr std::size_t kMinBlocksForHelpers = 128;  ///< 512 chains, 256 strips of 2 columns
 };
