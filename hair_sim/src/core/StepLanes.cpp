@@ -50,6 +50,18 @@ template <class M, class V>
 HAIR_SIM_ALWAYS_INLINE V sel(M m, V a, V b) {
   return m ? a : b;
 }
+/// Whether any lane of the mask is set (an OR of the halves, then of the lanes).
+template <class M>
+HAIR_SIM_ALWAYS_INLINE bool anyLane(M m) {
+  if constexpr (sizeof(M) == 32) {
+    typedef long M2 __attribute__((vector_size(16)));
+    const M2 lo = {m[0], m[1]}, hi = {m[2], m[3]};
+    const M2 o = lo | hi;
+    return (o[0] | o[1]) != 0;
+  } else {
+    return (m[0] | m[1]) != 0;
+  }
+}
 
 /// atan2(s, c) for s >= 0, in [0, pi], within an ulp or two of std::atan2: atan of the ratio by the Cephes
 /// library's reduction (to |x| <= 0.66) and rational approximation; plain arithmetic, so every lane and
@@ -217,11 +229,12 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
                         sel(has_axis, vatan2(sn, c) / sel(has_axis, sn, splat<V>(1.0)), splat<V>(0.0)));
     const M opposite = ~series & ~has_axis & ~(c > 0.0);
     V hx = axx * scale, hy = axy * scale, hz = axz * scale;
-    for (int l = 0; l < N; ++l)
-      if (opposite[l]) {
-        const Vec3 h = rotationVectorBetween(Vec3(restx[l], resty[l], restz[l]), Vec3(nx[l], ny[l], nz[l]));
-        hx[l] = h.x(), hy[l] = h.y(), hz[l] = h.z();
-      }
+    if (anyLane(opposite))
+      for (int l = 0; l < N; ++l)
+        if (opposite[l]) {
+          const Vec3 h = rotationVectorBetween(Vec3(restx[l], resty[l], restz[l]), Vec3(nx[l], ny[l], nz[l]));
+          hx[l] = h.x(), hy[l] = h.y(), hz[l] = h.z();
+        }
 
     // (7): the new rate w (without a part along n, limited to max_angle_step) and the new direction,
     // rotateByVector(w, n) by its series for the small turns (the other lanes by the scalar function).
@@ -249,11 +262,12 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     bx = sel(tiny, nx + crx, bx), by = sel(tiny, ny + cry, by), bz = sel(tiny, nz + crz, bz);
     const V len = vsqrt(bx * bx + by * by + bz * bz);
     V kx = bx / len, ky = by / len, kz = bz / len;
-    for (int l = 0; l < N; ++l)
-      if (!small[l]) {
-        const Vec3 next = rotateByVector(Vec3(Wx[l], Wy[l], Wz[l]), Vec3(nx[l], ny[l], nz[l])).normalized();
-        kx[l] = next.x(), ky[l] = next.y(), kz[l] = next.z();
-      }
+    if (anyLane(~small))
+      for (int l = 0; l < N; ++l)
+        if (!small[l]) {
+          const Vec3 next = rotateByVector(Vec3(Wx[l], Wy[l], Wz[l]), Vec3(nx[l], ny[l], nz[l])).normalized();
+          kx[l] = next.x(), ky[l] = next.y(), kz[l] = next.z();
+        }
 
     // The bend limit (a lane over it goes to the exact step), the new end, and the next segment's rest
     // frame Q = minimalRotation(Q styled, next) Q = (c I + [v]x + v h^T) Q, v = Q styled x next, h = v / (1 +
@@ -304,9 +318,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
         far = B.motion < 0.5 ? (far & (dist2 * (keep_b * keep_b) > lim * lim)) : (far & 0);
       }
       const M reach = ~far & active;
-      bool near_any = false;
-      for (int l = 0; l < N; ++l) near_any |= reach[l] != 0;
-      if (!near_any) continue;
+      if (!anyLane(reach)) continue;
       const double* S = B.sinv;
       const double* Sb = B.sinv_before;
       const V qx = S[0] * dx + S[1] * dy + S[2] * dz;
