@@ -899,7 +899,19 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
     Vec3 hi = to.normalized();
     const Vec3 half = rotateByVector(0.5 * rotationVectorBetween(lo, hi), lo).normalized();
     (validBodies(half) ? hi : lo) = half;
-    for (int it = 1; it < 40; ++it) {
+    // The valid direction nearest the blocked one is mostly close to it (2^-12 to 2^-7 of the arc in 81 % of
+    // the escapes in docs/benchmarks.md): first the point 2^-6 of the way from lo, six halvings toward lo
+    // without a probe. Valid: the bracket is that 2^-6 and six probes are saved; not: one probe more.
+    Vec3 near = hi;
+    for (int j = 0; j < 6; ++j) near = (lo + near).normalized();
+    int halvings = 39;
+    if (validBodies(near)) {
+      hi = near;
+      halvings -= 6;
+    } else {
+      lo = near;
+    }
+    for (int it = 0; it < halvings; ++it) {
       const Vec3 mid = (lo + hi).normalized();
       (validBodies(mid) ? hi : lo) = mid;
     }
