@@ -579,6 +579,9 @@ void Simulator::buildSprings() {
     ++partner_start_[static_cast<std::size_t>(p.b) + 1];
   }
   for (std::size_t k = 0; k < n; ++k) partner_start_[k + 1] += partner_start_[k];
+  spring_inv_rest2_.resize(springs_.size());
+  for (std::size_t k = 0; k < springs_.size(); ++k)
+    spring_inv_rest2_[k] = 1.0 / (springs_[k].rest * springs_[k].rest);
   partner_index_.assign(static_cast<std::size_t>(partner_start_[n]), 0);
   partner_rest_.assign(static_cast<std::size_t>(partner_start_[n]), 0.0);
   std::vector<int> fill(partner_start_.begin(), partner_start_.end() - 1);
@@ -629,33 +632,46 @@ void Simulator::computeSpringForces() {
   std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
   const double ks = params_.spring_stiffness;
   const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
-  double min_ratio[2] = {1e300, 1e300}, max_ratio[2] = {0.0, 0.0};
-  double min_gap = 1e300;
-  for (const SpringPair& p : springs_) {
-    const Vec3 delta = positions_[static_cast<std::size_t>(p.b)] - positions_[static_cast<std::size_t>(p.a)];
-    const double length = delta.norm();
-    const int kind = p.within_strip ? 1 : 0;
-    const double ratio = length / p.rest;
-    min_ratio[kind] = std::min(min_ratio[kind], ratio);
-    max_ratio[kind] = std::max(max_ratio[kind], ratio);
-    if (!p.within_strip) min_gap = std::min(min_gap, length);
-    // (11) with a dead band: x = stretch beyond the band, F = -k_s x along the pair.
-    double x = 0.0;
-    if (ratio < lo)
-      x = length - lo * p.rest;
-    else if (ratio > hi)
-      x = length - hi * p.rest;
+  const double lo2 = lo * lo, hi2 = hi * hi;
+  // On squares: a pair within its dead band (most of them) costs no square root and no division. The pairs
+  // within strips come first in springs_, those between strips after them.
+  double min_r2[2] = {1e300, 1e300}, max_r2[2] = {0.0, 0.0};
+  double min_within = 1e300, max_within = 0.0, min_between = 1e300, max_between = 0.0;
+  double min_gap2 = 1e300;
+  const SpringPair* pairs = springs_.data();
+  const double* inv_rest2 = spring_inv_rest2_.data();
+  const Vec3* pos = positions_.data();
+  Vec3* force = spring_force_.data();
+  const std::size_t count = springs_.size();
+  for (std::size_t k = 0; k < count; ++k) {
+    const SpringPair& p = pairs[k];
+    const Vec3 delta = pos[p.b] - pos[p.a];
+    const double l2 = delta.squaredNorm();
+    const double r2 = l2 * inv_rest2[k];  // (length / rest)^2
+    if (p.within_strip) {
+      min_within = std::min(min_within, r2);
+      max_within = std::max(max_within, r2);
+    } else {
+      min_between = std::min(min_between, r2);
+      max_between = std::max(max_between, r2);
+      min_gap2 = std::min(min_gap2, l2);
+    }
+    // (11) with a dead band: x = stretch beyond the band, F = -k_s x along the pair (none for a NaN).
+    if (!(r2 < lo2) && !(r2 > hi2)) continue;
+    const double length = std::sqrt(l2);
+    const double x = r2 < lo2 ? length - lo * p.rest : length - hi * p.rest;
     if (x == 0.0 || length < 1e-12) continue;
     const Vec3 f =
         (ks * x / length) * delta;  // pulls a toward b when stretched, pushes apart when compressed
-    spring_force_[static_cast<std::size_t>(p.a)] += f;
-    spring_force_[static_cast<std::size_t>(p.b)] -= f;
+    force[p.a] += f;
+    force[p.b] -= f;
   }
+  min_r2[1] = min_within, max_r2[1] = max_within, min_r2[0] = min_between, max_r2[0] = max_between;
   for (int k = 0; k < 2; ++k) {
-    min_ratio_[k] = min_ratio[k] == 1e300 ? 1.0 : min_ratio[k];
-    max_ratio_[k] = max_ratio[k] == 0.0 ? 1.0 : max_ratio[k];
+    min_ratio_[k] = min_r2[k] == 1e300 ? 1.0 : std::sqrt(min_r2[k]);
+    max_ratio_[k] = max_r2[k] == 0.0 ? 1.0 : std::sqrt(max_r2[k]);
   }
-  min_gap_ = min_gap == 1e300 ? 0.0 : min_gap;
+  min_gap_ = min_gap2 == 1e300 ? 0.0 : std::sqrt(min_gap2);
 }
 
 std::vector<Ellipsoid> Simulator::bodiesInHeadFrame(const Iso3& head_pose, const std::vector<Iso3>& frames,

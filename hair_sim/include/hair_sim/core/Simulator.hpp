@@ -276,7 +276,8 @@ class Simulator {
   std::vector<double> margins_;       ///< distinct thickness margins
   std::vector<Body> bodies_;
   std::vector<SpringPair> springs_;
-  std::vector<long> moved_in_step_;  ///< step number in which a point got its final position
+  std::vector<double> spring_inv_rest2_;  ///< per spring pair, 1 / rest^2
+  std::vector<long> moved_in_step_;       ///< step number in which a point got its final position
   // resolveCollisions: the bodies within reach of the segment, the pivot and the previous end in the
   // sphere space of each body.
   std::vector<std::size_t> near_;
