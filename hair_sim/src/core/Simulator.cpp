@@ -176,6 +176,7 @@ void Simulator::buildLanes() {
   for (std::size_t ch = 0; ch < chains.size(); ++ch)
     strip_last_block_[static_cast<std::size_t>(chains[ch].first)] = static_cast<int>(ch / W);
   block_flags_.assign(blocks * W, 0);
+  fillLaneConstants();
   const std::size_t n = positions_.size();
   lane_flag_.assign(n, lanes::kPointFull);
   new_position_.assign(n, Vec3::Zero());
@@ -225,10 +226,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   job.rate = rate_.data();
   job.previous_mid = previous_mid_.data();
   job.spring_force = spring_force_.data();
-  job.rest_dir = rest_dir_.data();
-  job.styled_dir = styled_dir_.data();
-  job.length = length_.data();
-  job.inv_inertia = inv_inertia_.data();
   job.out_position = new_position_.data();
   job.out_direction = new_direction_.data();
   job.out_rate = new_rate_.data();
@@ -250,6 +247,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     lanes::BlockJob j = job;
     j.rows = block_rows_[blk];
     j.point = &lane_point_[blk * stride];
+    j.constants = &lane_constants_[blk * stride * lanes::kConstants];
     j.bodies = nb > 0 ? &lane_bodies_[static_cast<std::size_t>(block_margin_[blk]) * nb] : nullptr;
     lanes::stepBlock(j, baseline);
     std::copy(j.first_flagged_row, j.first_flagged_row + W, &block_flags_[blk * W]);
@@ -364,6 +362,16 @@ double Simulator::commitLanes(std::size_t begin, std::size_t end) {
 
 double Simulator::commitLanes(std::size_t i) { return commitLanes(i, i + 1); }
 
+void Simulator::fillLaneConstants() {
+  const std::size_t stride = static_cast<std::size_t>(lane_stride_rows_) * lanes::kLanes;
+  const std::size_t blocks = block_rows_.size();
+  lane_constants_.assign(blocks * stride * lanes::kConstants, 0.0);
+  for (std::size_t blk = 0; blk < blocks; ++blk)
+    lanes::fillLaneConstants(&lane_constants_[blk * stride * lanes::kConstants], &lane_point_[blk * stride],
+                             lane_stride_rows_, rest_dir_.data(), styled_dir_.data(), length_.data(),
+                             inv_inertia_.data());
+}
+
 void Simulator::updateSegmentConstants() {
   const double dt = params_.substep;
   const double k = params_.hinge_stiffness;
@@ -408,6 +416,7 @@ void Simulator::setParameters(const PhysicsParameters& parameters) {
                                parameters.spring_max_pairs != params_.spring_max_pairs;
   params_ = parameters;
   updateSegmentConstants();
+  fillLaneConstants();
   if (pairing_changed)
     buildSprings();
   else

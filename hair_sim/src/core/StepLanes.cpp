@@ -160,24 +160,26 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     vx = vec3(job.velocity, 0), vy = vec3(job.velocity, 1), vz = vec3(job.velocity, 2);
     wx = vec3(job.rate, 0), wy = vec3(job.rate, 1), wz = vec3(job.rate, 2);
     fx = vec3(job.spring_force, 0), fy = vec3(job.spring_force, 1), fz = vec3(job.spring_force, 2);
-    ux = vec3(job.rest_dir, 0), uy = vec3(job.rest_dir, 1), uz = vec3(job.rest_dir, 2);
-    sx = vec3(job.styled_dir, 0), sy = vec3(job.styled_dir, 1), sz = vec3(job.styled_dir, 2);
+    const double* k_row = job.constants + static_cast<std::ptrdiff_t>(r) * kConstants * W + l0;
+    auto constant = [&](int c) {
+      V v;
+      __builtin_memcpy(&v, k_row + c * W, sizeof(V));
+      return v;
+    };
+    ux = constant(0), uy = constant(1), uz = constant(2);
+    sx = constant(3), sy = constant(4), sz = constant(5);
     mx = vec3(job.previous_mid, 0), my = vec3(job.previous_mid, 1), mz = vec3(job.previous_mid, 2);
     ex = vec3(job.positions, 0), ey = vec3(job.positions, 1), ez = vec3(job.positions, 2);
-    d = gather(job.length, 1, 0);
-    ii = gather(job.inv_inertia, 1, 0);
+    d = constant(6);
+    ii = constant(7);
     if (!all_active) {  // an idle lane: a still vertical segment, never written back
       const V zero = splat<V>(0.0), one = splat<V>(1.0);
       nx = sel(active, nx, zero), ny = sel(active, ny, zero), nz = sel(active, nz, one);
       vx = sel(active, vx, zero), vy = sel(active, vy, zero), vz = sel(active, vz, zero);
       wx = sel(active, wx, zero), wy = sel(active, wy, zero), wz = sel(active, wz, zero);
       fx = sel(active, fx, zero), fy = sel(active, fy, zero), fz = sel(active, fz, zero);
-      ux = sel(active, ux, zero), uy = sel(active, uy, zero), uz = sel(active, uz, one);
-      sx = sel(active, sx, zero), sy = sel(active, sy, zero), sz = sel(active, sz, one);
       mx = sel(active, mx, px), my = sel(active, my, py), mz = sel(active, mz, pz + 0.5);
       ex = sel(active, ex, px), ey = sel(active, ey, py), ez = sel(active, ez, pz + 1.0);
-      d = sel(active, d, one);
-      ii = sel(active, ii, zero);
     }
 
     // Segment midpoints; the turbulence is evaluated there (world points), lane by lane.
@@ -393,6 +395,20 @@ __attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) {
 }  // namespace
 
 bool haveAvx2() { return cpuHasAvx2(); }
+
+void fillLaneConstants(double* out, const int* point, int rows, const Vec3* rest_dir, const Vec3* styled_dir,
+                       const double* length, const double* inv_inertia) {
+  for (int r = 0; r < rows; ++r)
+    for (int l = 0; l < W; ++l) {
+      const int i = point[r * W + l];
+      double* k = out + static_cast<std::ptrdiff_t>(r) * kConstants * W + l;
+      const Vec3 u = i >= 0 ? rest_dir[i] : Vec3::UnitZ();
+      const Vec3 s = i >= 0 ? styled_dir[i] : Vec3::UnitZ();
+      const double v[kConstants] = {
+          u.x(), u.y(), u.z(), s.x(), s.y(), s.z(), i >= 0 ? length[i] : 1.0, i >= 0 ? inv_inertia[i] : 0.0};
+      for (int c = 0; c < kConstants; ++c) k[c * W] = v[c];
+    }
+}
 
 void stepBlock(BlockJob& job, bool baseline_only) {
 #if defined(HAIR_SIM_AVX2_DISPATCH)

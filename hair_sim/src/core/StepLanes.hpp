@@ -43,10 +43,10 @@ struct BlockJob {
   const Vec3* rate = nullptr;
   const Vec3* previous_mid = nullptr;
   const Vec3* spring_force = nullptr;
-  const Vec3* rest_dir = nullptr;
-  const Vec3* styled_dir = nullptr;
-  const double* length = nullptr;
-  const double* inv_inertia = nullptr;
+  /// The block's segment constants in lane order, [row][kConstants][kLanes] (rows of the lane stride): rest
+  /// direction x y z, styled direction x y z, length, inverse inertia; an idle lane's are those of a still
+  /// vertical segment (0 0 1, 0 0 1, 1, 0). Filled by fillLaneConstants.
+  const double* constants = nullptr;
   // The state at the end of the substep (written for the block's points).
   Vec3* out_position = nullptr;
   Vec3* out_direction = nullptr;
@@ -66,6 +66,14 @@ struct BlockJob {
   /// Out: per lane, the first row from which the exact step must take over (0: none).
   int first_flagged_row[kLanes] = {};
 };
+
+/// Values per lane and row in BlockJob::constants.
+constexpr int kConstants = 8;
+
+/// Fills one block's BlockJob::constants (rows: the lane stride) from the per-point segment constants;
+/// point: [rows][kLanes] as BlockJob::point.
+void fillLaneConstants(double* out, const int* point, int rows, const Vec3* rest_dir, const Vec3* styled_dir,
+                       const double* length, const double* inv_inertia);
 
 /// Advances one block (AVX2 when the CPU has it unless baseline_only).
 void stepBlock(BlockJob& job, bool baseline_only);

@@ -199,6 +199,8 @@ class Simulator {
   /// The Lanes path: every block through lanes::stepBlock, the band of every spring pair checked at the new
   /// places, the strips that passed committed, the others through stepStrip in strip order.
   void stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally);
+  /// lane_constants_ from the segment constants (buildLanes, setParameters).
+  void fillLaneConstants();
   /// Point i takes the lanes' result (new_*_) as its state at the end of the substep; returns |w|^2.
   double commitLanes(std::size_t i);
   /// commitLanes for the points [begin, end) (a strip's points below its roots), as block copies.
@@ -337,6 +339,7 @@ class Simulator {
   std::vector<int> strip_last_block_;         ///< per strip, the block of its last chain
   std::vector<int> block_flags_;              ///< [block][lane]: lanes::BlockJob::first_flagged_row
   std::vector<unsigned char> lane_flag_;      ///< per point: lanes::BlockJob::out_flag
+  std::vector<double> lane_constants_;        ///< per block: lanes::BlockJob::constants
   std::unique_ptr<LaneWorkers> workers_;      ///< the helper threads (setThreads), or none
   static constexpr std::size_t kMinBlocksForHelpers = 128;  ///< 512 chains, 256 strips of 2 columns
 };
