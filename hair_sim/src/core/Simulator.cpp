@@ -926,7 +926,8 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
     (validBodies(half) ? hi : lo) = half;
     // The valid direction nearest the blocked one is mostly close to it (2^-12 to 2^-7 of the arc in 81 % of
     // the escapes in docs/benchmarks.md): first the point 2^-6 of the way from lo, six halvings toward lo
-    // without a probe. Valid: the bracket is that 2^-6 and six probes are saved; not: one probe more.
+    // without a probe. Valid: the bracket is that 2^-6, six halvings without a probe for the one made (five
+    // probes saved); not: one probe more.
     Vec3 near = hi;
     for (int j = 0; j < 6; ++j) near = (lo + near).normalized();
     int halvings = 39;
@@ -1358,7 +1359,9 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
         const Vec3& free_next = new_direction_[i];
         const Vec3& pivot = positions_[parent];
         const double d = length_[i];
-        if (before_from || (!(lane_flag_[i] & lanes::kPointBodies) && !bandActs(i, new_position_[i]))) {
+        // (The end as resolveCollisions' band projection computes it, not new_position_: the same bits only
+        // while neither file contracts to FMA.)
+        if (before_from || (!(lane_flag_[i] & lanes::kPointBodies) && !bandActs(i, pivot + d * free_next))) {
           tally.max_rate2 = std::max(tally.max_rate2, commitLanes(i));
           if (!before_from) checkBand(i);
           parent = i;
