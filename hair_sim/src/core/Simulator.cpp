@@ -644,7 +644,6 @@ void Simulator::computeSpringForces() {
   const double lo2 = lo * lo, hi2 = hi * hi;
   // On squares: a pair within its dead band (most of them) costs no square root and no division. The pairs
   // within strips come first in springs_, those between strips after them.
-  double min_r2[2] = {1e300, 1e300}, max_r2[2] = {0.0, 0.0};
   double min_within = 1e300, max_within = 0.0, min_between = 1e300, max_between = 0.0;
   double min_gap2 = 1e300;
   const SpringPair* pairs = springs_.data();
@@ -675,11 +674,9 @@ void Simulator::computeSpringForces() {
     force[p.a] += f;
     force[p.b] -= f;
   }
-  min_r2[1] = min_within, max_r2[1] = max_within, min_r2[0] = min_between, max_r2[0] = max_between;
-  for (int k = 0; k < 2; ++k) {
-    min_ratio_[k] = min_r2[k] == 1e300 ? 1.0 : std::sqrt(min_r2[k]);
-    max_ratio_[k] = max_r2[k] == 0.0 ? 1.0 : std::sqrt(max_r2[k]);
-  }
+  auto ratio = [](double r2, double none) { return r2 == none ? 1.0 : std::sqrt(r2); };
+  min_ratio_[0] = ratio(min_between, 1e300), max_ratio_[0] = ratio(max_between, 0.0);
+  min_ratio_[1] = ratio(min_within, 1e300), max_ratio_[1] = ratio(max_within, 0.0);
   min_gap_ = min_gap2 == 1e300 ? 0.0 : std::sqrt(min_gap2);
 }
 
@@ -833,7 +830,6 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
   const int p_begin = partner_start_[static_cast<std::size_t>(point)];
   const int p_end = partner_start_[static_cast<std::size_t>(point) + 1];
   if (p_begin == p_end) return result;
-  const double lo_f = params_.spring_proximity_factor, hi_f = params_.spring_far_factor;
   // Projects the end of direction u into every band (sweeps); returns whether anything moved.
   auto project = [&](Vec3& u) {
     bool moved = false;
@@ -845,20 +841,9 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
         const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
         if (moved_in_step_[j] != steps_) continue;
         const Vec3& other = positions_[j];
-        const double signed_rest = partner_rest_[static_cast<std::size_t>(q)];
-        const double rest = std::abs(signed_rest);
-        const bool within = signed_rest > 0.0;
         const Vec3 end = pivot + d * u;
-        const double dist = (end - other).norm();
-        double r;
-        if (dist < lo_f * rest) {
-          r = lo_f * rest * 1.000001;
-        } else if (within && dist > hi_f * rest) {
-          // A strip's width stays within the band; between strips only the spring force attracts.
-          r = hi_f * rest * 0.999999;
-        } else {
-          continue;
-        }
+        const double r = bandTarget((end - other).norm(), partner_rest_[static_cast<std::size_t>(q)]);
+        if (r == 0.0) continue;
         // Nearest point to `end` on the circle where the sphere |x - pivot| = d meets |x - other| = r.
         const Vec3 po = other - pivot;
         const double L = po.norm();
@@ -1011,6 +996,15 @@ int Simulator::rowBandSide(std::size_t strip, int row) const {
       if (here != 0) side = here;
     }
   return side;
+}
+
+double Simulator::bandTarget(double dist, double signed_rest) const {
+  const double rest = std::abs(signed_rest);
+  if (dist < params_.spring_proximity_factor * rest) return params_.spring_proximity_factor * rest * 1.000001;
+  // A strip's width stays within the band; between strips only the spring force attracts.
+  if (signed_rest > 0.0 && dist > params_.spring_far_factor * rest)
+    return params_.spring_far_factor * rest * 0.999999;
+  return 0.0;
 }
 
 int Simulator::bandSide(double dist, double rest, double far_rest) const {
@@ -1324,17 +1318,25 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
     }
   };
   // Whether resolveCollisions' band projection would move the end `end` of point i (its first sweep's test).
-  const double lo_f = params_.spring_proximity_factor, hi_f = params_.spring_far_factor;
   auto bandActs = [&](std::size_t i, const Vec3& end) {
     for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
       const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
       if (moved_in_step_[j] != steps_) continue;
-      const double signed_rest = partner_rest_[static_cast<std::size_t>(q)];
-      const double rest = std::abs(signed_rest);
-      const double dist = (end - positions_[j]).norm();
-      if (dist < lo_f * rest || (signed_rest > 0.0 && dist > hi_f * rest)) return true;
+      if (bandTarget((end - positions_[j]).norm(), partner_rest_[static_cast<std::size_t>(q)]) != 0.0)
+        return true;
     }
     return false;
+  };
+  // Point i's state at the end of the substep: direction `next` from `pivot`, turned by w.
+  auto place = [&](std::size_t i, const Vec3& pivot, double d, const Vec3& next, const Vec3& w) {
+    tally.max_rate2 = std::max(tally.max_rate2, w.squaredNorm());
+    rate_[i] = w;
+    direction_[i] = next;
+    positions_[i] = pivot + d * next;
+    moved_in_step_[i] = steps_;
+    const Vec3 mid_next = pivot + 0.5 * d * next;
+    velocity_[i] = (mid_next - previous_mid_[i]) / dt;
+    previous_mid_[i] = mid_next;
   };
   for (int c = 0; c < s.columns; ++c) {
     // Q: the rotation of row q_row's segment from its styled frame (the rest frame of row q_row + 1), brought
@@ -1374,15 +1376,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
         if (next == free_next) {
           tally.max_rate2 = std::max(tally.max_rate2, commitLanes(i));
         } else {
-          const Vec3 w = rotationVectorBetween(direction_[i], next);
-          tally.max_rate2 = std::max(tally.max_rate2, w.squaredNorm());
-          rate_[i] = w;
-          direction_[i] = next;
-          positions_[i] = pivot + d * next;
-          moved_in_step_[i] = steps_;
-          const Vec3 mid_next = pivot + 0.5 * d * next;
-          velocity_[i] = (mid_next - previous_mid_[i]) / dt;
-          previous_mid_[i] = mid_next;
+          place(i, pivot, d, next, rotationVectorBetween(direction_[i], next));
           diverged = true;
         }
         checkBand(i);
@@ -1448,15 +1442,8 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       }
       // The rotation of this substep: w itself unless a limit or a constraint moved the end.
       if (next != free_next) w = rotationVectorBetween(n, next);
-      tally.max_rate2 = std::max(tally.max_rate2, w.squaredNorm());
-      rate_[i] = w;
-      direction_[i] = next;
-      positions_[i] = pivot + d * next;
-      moved_in_step_[i] = steps_;
+      place(i, pivot, d, next, w);
       checkBand(i);
-      const Vec3 mid_next = pivot + 0.5 * d * next;
-      velocity_[i] = (mid_next - previous_mid_[i]) / dt;
-      previous_mid_[i] = mid_next;
       parent = i;
     }
   }

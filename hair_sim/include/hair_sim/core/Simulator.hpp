@@ -245,6 +245,10 @@ class Simulator {
   /// A within-strip pair at distance dist against the band: 1 farther than far_factor x far_rest (the far
   /// edge, to 1e-10 relative), -1 closer than proximity_factor x rest, else 0.
   int bandSide(double dist, double rest, double far_rest) const;
+  /// resolveCollisions' band projection for a partner at distance dist (signed_rest as partner_rest_): the
+  /// distance to move the end to (just inside the near edge, or the far edge of a within-strip pair), or 0
+  /// when the pair is within its band.
+  double bandTarget(double dist, double signed_rest) const;
   /// Rest length of the within-strip pair (i, j), or fallback when they are not paired.
   double withinRest(std::size_t i, std::size_t j, double fallback) const;
   /// Gauss-Seidel passes over a strip whose band does not hold after the sweep: every segment again
