@@ -616,6 +616,42 @@ TEST(SimulatorTest, SetParametersRejectsBadSetsAndKeepsTheOldOne) {
   EXPECT_EQ(sim.springs().size(), springs);
 }
 
+TEST(SimulatorTest, SetParametersWithoutSpringsDropsTheirForce) {
+  // Springs turned off between two substeps act no more: the next substep is the one of a Simulator built
+  // without springs, bit for bit. The shape spreads the strip's two columns to 3x their rest width below
+  // the root, beyond the far factor (1.5), so the springs pull in the substep before.
+  PhysicsParameters on = bare();
+  on.springs_within_strips = true;
+  on.springs_between_strips = false;
+  PhysicsParameters off = on;
+  off.springs_within_strips = false;
+  const Hairstyle style = test::hangingStrip(2, 5, 0.05, 0.0);
+  std::vector<Vec3> shape = style.strips[0].points;
+  for (int r = 1; r < 5; ++r)
+    for (int c = 0; c < 2; ++c) shape[static_cast<std::size_t>(2 * r + c)].y() *= 1.0 + 2.0 * r / 4.0;
+  StepInputs in;
+  Simulator toggled(style, on);
+  ASSERT_FALSE(toggled.springs().empty());
+  toggled.setShape(shape);
+  toggled.step(in);
+  toggled.setParameters(off);
+  ASSERT_TRUE(toggled.springs().empty());
+  toggled.setShape(shape);
+  toggled.step(in);
+  Simulator without(style, off);
+  without.setShape(shape);
+  without.step(in);
+  const std::vector<Vec3>& a = toggled.positionsHead();
+  const std::vector<Vec3>& b = without.positionsHead();
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)));
+  // The springs had moved the points: with them the same substep ends elsewhere.
+  Simulator with(style, on);
+  with.setShape(shape);
+  with.step(in);
+  EXPECT_GT((with.positionsHead()[9] - b[9]).norm(), 1e-6);
+}
+
 TEST(SimulatorTest, InertiaFloorOnlyBitesForUnstableCombinations) {
   const double dt = 1.0 / 240.0;
   // The tests above use physical inertia: the floor is far below it.

@@ -455,6 +455,8 @@ void Simulator::reset() {
 
 void Simulator::buildSprings() {
   springs_.clear();
+  // The last substep's forces go with the pairs (without springs step() computes none to replace them).
+  std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
   std::vector<Vec3> styled;  // pairs and rest lengths come from the styled shape
   for (const Strip& s : hairstyle_.strips) styled.insert(styled.end(), s.points.begin(), s.points.end());
   if (params_.springs_within_strips) {
