@@ -652,6 +652,51 @@ TEST(SimulatorTest, SetParametersWithoutSpringsDropsTheirForce) {
   EXPECT_GT((with.positionsHead()[9] - b[9]).norm(), 1e-6);
 }
 
+TEST(SimulatorTest, SpringRatiosAndGapAreThoseOfTheStateTheSubstepBegan) {
+  // minSpringRatio, maxSpringRatio, minStripGap against the pairs measured directly on the positions the last
+  // substep began from (the default hairstyle shaken: its strips' widths move), on every step path.
+  for (Simulator::StepPath path :
+       {Simulator::StepPath::Lanes, Simulator::StepPath::LanesBaseline, Simulator::StepPath::Exact}) {
+    Simulator sim = defaultSimulator();
+    sim.setStepPath(path);
+    HeadMotionEstimator head;
+    head.reset(Iso3::Identity());
+    std::vector<Vec3> before;
+    for (int i = 1; i <= 120; ++i) {
+      Iso3 pose = Iso3::Identity();
+      pose.linear() = rotationFromRpy(Vec3(0.0, 0.0, 1.5 * std::sin(i * 0.08)));
+      StepInputs in;
+      in.head = head.update(pose, sim.parameters().substep);
+      before = sim.positionsHead();
+      sim.step(in);
+    }
+    double min_ratio[2] = {1e300, 1e300}, max_ratio[2] = {0.0, 0.0}, min_gap = 1e300;
+    for (const SpringPair& p : sim.springs()) {
+      const double length =
+          (before[static_cast<std::size_t>(p.b)] - before[static_cast<std::size_t>(p.a)]).norm();
+      const int w = p.within_strip ? 1 : 0;
+      min_ratio[w] = std::min(min_ratio[w], length / p.rest);
+      max_ratio[w] = std::max(max_ratio[w], length / p.rest);
+      if (!p.within_strip) min_gap = std::min(min_gap, length);
+    }
+    ASSERT_LT(min_ratio[1], max_ratio[1]);
+    ASSERT_LT(min_gap, 1e300);
+    for (int w = 0; w < 2; ++w) {
+      EXPECT_NEAR(sim.minSpringRatio(w == 1), min_ratio[w], 1e-12 * min_ratio[w]);
+      EXPECT_NEAR(sim.maxSpringRatio(w == 1), max_ratio[w], 1e-12 * max_ratio[w]);
+    }
+    EXPECT_NEAR(sim.minStripGap(), min_gap, 1e-12 * min_gap);
+  }
+  // Without pairs: ratios 1, gap 0.
+  PhysicsParameters p = bare();
+  p.springs_within_strips = p.springs_between_strips = false;
+  Simulator none(test::hangingStrip(2, 5, 0.05, 0.3), p);
+  none.step(StepInputs());
+  EXPECT_EQ(none.minSpringRatio(true), 1.0);
+  EXPECT_EQ(none.maxSpringRatio(false), 1.0);
+  EXPECT_EQ(none.minStripGap(), 0.0);
+}
+
 TEST(SimulatorTest, InertiaFloorOnlyBitesForUnstableCombinations) {
   const double dt = 1.0 / 240.0;
   // The tests above use physical inertia: the floor is far below it.

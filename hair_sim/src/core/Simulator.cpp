@@ -457,6 +457,7 @@ void Simulator::buildSprings() {
   springs_.clear();
   // The last substep's forces go with the pairs (without springs step() computes none to replace them).
   std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
+  spring_touched_.clear();
   std::vector<Vec3> styled;  // pairs and rest lengths come from the styled shape
   for (const Strip& s : hairstyle_.strips) styled.insert(styled.end(), s.points.begin(), s.points.end());
   if (params_.springs_within_strips) {
@@ -590,9 +591,25 @@ void Simulator::buildSprings() {
     ++partner_start_[static_cast<std::size_t>(p.b) + 1];
   }
   for (std::size_t k = 0; k < n; ++k) partner_start_[k + 1] += partner_start_[k];
-  spring_inv_rest2_.resize(springs_.size());
-  for (std::size_t k = 0; k < springs_.size(); ++k)
-    spring_inv_rest2_[k] = 1.0 / (springs_[k].rest * springs_[k].rest);
+  // The pairs as computeSpringForces' scan reads them: the ends and 1 / rest^2 in arrays, those within strips
+  // first (buildSprings adds them first).
+  const std::size_t count = springs_.size();
+  spring_inv_rest2_.resize(count);
+  spring_a_.resize(count);
+  spring_b_.resize(count);
+  spring_outside_.resize(count);
+  spring_touched_.clear();
+  spring_within_ = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const SpringPair& p = springs_[k];
+    spring_inv_rest2_[k] = 1.0 / (p.rest * p.rest);
+    spring_a_[k] = p.a;
+    spring_b_[k] = p.b;
+    if (p.within_strip) {
+      if (spring_within_ != k) throw std::logic_error("Simulator::buildSprings: a pair within a strip last");
+      ++spring_within_;
+    }
+  }
   partner_index_.assign(static_cast<std::size_t>(partner_start_[n]), 0);
   partner_rest_.assign(static_cast<std::size_t>(partner_start_[n]), 0.0);
   std::vector<int> fill(partner_start_.begin(), partner_start_.end() - 1);
@@ -640,46 +657,40 @@ void Simulator::buildBandPairs() {
 }
 
 void Simulator::computeSpringForces() {
-  std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
+  // Only the points the last substep's springs pushed have a force to clear.
+  for (int i : spring_touched_) spring_force_[static_cast<std::size_t>(i)].setZero();
+  spring_touched_.clear();
   const double ks = params_.spring_stiffness;
   const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
-  const double lo2 = lo * lo, hi2 = hi * hi;
-  // On squares: a pair within its dead band (most of them) costs no square root and no division. The pairs
-  // within strips come first in springs_, those between strips after them.
-  double min_within = 1e300, max_within = 0.0, min_between = 1e300, max_between = 0.0;
-  double min_gap2 = 1e300;
-  const SpringPair* pairs = springs_.data();
-  const double* inv_rest2 = spring_inv_rest2_.data();
+  // The scan (in lanes) finds the extremes and the pairs outside their dead band (most pairs are within it:
+  // no square root, no division); then (11) for those, in pair order: x = stretch beyond the band, F = -k_s
+  // x along the pair (none for a NaN, which the scan does not list).
+  lanes::SpringExtremes e;
+  const std::size_t outside = lanes::scanSprings(
+      positions_.data(), spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(), spring_within_,
+      springs_.size(), lo * lo, hi * hi, e, spring_outside_.data(), step_path_ == StepPath::LanesBaseline);
   const Vec3* pos = positions_.data();
   Vec3* force = spring_force_.data();
-  const std::size_t count = springs_.size();
-  for (std::size_t k = 0; k < count; ++k) {
-    const SpringPair& p = pairs[k];
+  for (std::size_t n = 0; n < outside; ++n) {
+    const std::size_t k = static_cast<std::size_t>(spring_outside_[n]);
+    const SpringPair& p = springs_[k];
     const Vec3 delta = pos[p.b] - pos[p.a];
     const double l2 = delta.squaredNorm();
-    const double r2 = l2 * inv_rest2[k];  // (length / rest)^2
-    if (p.within_strip) {
-      min_within = std::min(min_within, r2);
-      max_within = std::max(max_within, r2);
-    } else {
-      min_between = std::min(min_between, r2);
-      max_between = std::max(max_between, r2);
-      min_gap2 = std::min(min_gap2, l2);
-    }
-    // (11) with a dead band: x = stretch beyond the band, F = -k_s x along the pair (none for a NaN).
-    if (!(r2 < lo2) && !(r2 > hi2)) continue;
+    const double r2 = l2 * spring_inv_rest2_[k];
     const double length = std::sqrt(l2);
-    const double x = r2 < lo2 ? length - lo * p.rest : length - hi * p.rest;
+    const double x = r2 < lo * lo ? length - lo * p.rest : length - hi * p.rest;
     if (x == 0.0 || length < 1e-12) continue;
     const Vec3 f =
         (ks * x / length) * delta;  // pulls a toward b when stretched, pushes apart when compressed
     force[p.a] += f;
     force[p.b] -= f;
+    spring_touched_.push_back(p.a);
+    spring_touched_.push_back(p.b);
   }
   auto ratio = [](double r2, double none) { return r2 == none ? 1.0 : std::sqrt(r2); };
-  min_ratio_[0] = ratio(min_between, 1e300), max_ratio_[0] = ratio(max_between, 0.0);
-  min_ratio_[1] = ratio(min_within, 1e300), max_ratio_[1] = ratio(max_within, 0.0);
-  min_gap_ = min_gap2 == 1e300 ? 0.0 : std::sqrt(min_gap2);
+  min_ratio_[0] = ratio(e.min_between, 1e300), max_ratio_[0] = ratio(e.max_between, 0.0);
+  min_ratio_[1] = ratio(e.min_within, 1e300), max_ratio_[1] = ratio(e.max_within, 0.0);
+  min_gap_ = e.min_gap2 == 1e300 ? 0.0 : std::sqrt(e.min_gap2);
 }
 
 std::vector<Ellipsoid> Simulator::bodiesInHeadFrame(const Iso3& head_pose, const std::vector<Iso3>& frames,

@@ -283,6 +283,10 @@ class Simulator {
   std::vector<Body> bodies_;
   std::vector<SpringPair> springs_;
   std::vector<double> spring_inv_rest2_;  ///< per spring pair, 1 / rest^2
+  std::vector<int> spring_a_, spring_b_;  ///< per spring pair, its points (springs_[k].a, .b)
+  std::size_t spring_within_ = 0;         ///< springs_[0, spring_within_) are the pairs within strips
+  std::vector<int> spring_outside_;       ///< computeSpringForces: the pairs outside their band
+  std::vector<int> spring_touched_;       ///< the points with a spring force (the others have none)
   std::vector<long> moved_in_step_;       ///< step number in which a point got its final position
   // resolveCollisions: the bodies within reach of the segment, the pivot and the previous end in the
   // sphere space of each body.
