@@ -176,6 +176,10 @@ void Simulator::buildLanes() {
   for (std::size_t ch = 0; ch < chains.size(); ++ch)
     strip_last_block_[static_cast<std::size_t>(chains[ch].first)] = static_cast<int>(ch / W);
   block_flags_.assign(blocks * W, 0);
+  chain_max_rate2_.assign(blocks * W, 0.0);
+  strip_first_chain_.assign(hairstyle_.strips.size(), 0);
+  for (std::size_t ch = chains.size(); ch-- > 0;)  // the strip's columns are consecutive chains
+    strip_first_chain_[static_cast<std::size_t>(chains[ch].first)] = static_cast<int>(ch);
   fillLaneConstants();
   const std::size_t n = positions_.size();
   lane_flag_.assign(n, lanes::kPointFull);
@@ -184,6 +188,7 @@ void Simulator::buildLanes() {
   new_rate_.assign(n, Vec3::Zero());
   new_velocity_.assign(n, Vec3::Zero());
   new_mid_.assign(n, Vec3::Zero());
+  strip_committed_.assign(hairstyle_.strips.size(), -1);
   strip_exact_from_.assign(hairstyle_.strips.size(), kNoExact);
 }
 
@@ -251,6 +256,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     j.bodies = nb > 0 ? &lane_bodies_[static_cast<std::size_t>(block_margin_[blk]) * nb] : nullptr;
     lanes::stepBlock(j, baseline);
     std::copy(j.first_flagged_row, j.first_flagged_row + W, &block_flags_[blk * W]);
+    std::copy(j.max_rate2, j.max_rate2 + W, &chain_max_rate2_[blk * W]);
   };
   // The exact step takes over at the first flagged place of the strip in its sweep order (column by
   // column, root to tip): the places before it are the lanes'. Blocks are read in order, each once all its
@@ -303,8 +309,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
     readBlocksThrough(static_cast<std::size_t>(strip_last_block_[si]));
     const Strip& s = hairstyle_.strips[si];
-    const int first = strip_offset_[si] + s.columns;
-    const int end = strip_offset_[si] + s.pointCount();
     int from = strip_exact_from_[si];
     const int base = strip_offset_[si];
     auto sweepKey = [&](int point) {  // place of a point of strip si in the sweep
@@ -314,8 +318,11 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {
       const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
       const Vec3& a = new_position_[static_cast<std::size_t>(bp.later)];
-      const Vec3& b = bp.same_strip ? new_position_[static_cast<std::size_t>(bp.earlier)]
-                                    : positions_[static_cast<std::size_t>(bp.earlier)];
+      // (An earlier strip's place: the lanes' if it was committed from them.)
+      const Vec3& b =
+          (bp.same_strip || strip_committed_[static_cast<std::size_t>(bp.earlier_strip)] == steps_)
+              ? new_position_[static_cast<std::size_t>(bp.earlier)]
+              : positions_[static_cast<std::size_t>(bp.earlier)];
       const double dist2 = (a - b).squaredNorm();
       if (dist2 < bp.near2 || dist2 > bp.far2)  // kept by the later point of the pair in the sweep
         from = std::min(
@@ -326,10 +333,42 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       ++exact_strips_;
       continue;
     }
-    max_rate2 =
-        std::max(max_rate2, commitLanes(static_cast<std::size_t>(first), static_cast<std::size_t>(end)));
+    // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
+    strip_committed_[si] = steps_;
+    const std::size_t chain = static_cast<std::size_t>(strip_first_chain_[si]);
+    for (int c = 0; c < s.columns; ++c) max_rate2 = std::max(max_rate2, chain_max_rate2_[chain + c]);
   }
   tally.max_rate2 = std::max(tally.max_rate2, max_rate2);
+  // The strips that took the exact step have their state in positions_ etc.: copied into the lanes' buffers,
+  // which then become the state (every strip's end-of-substep state in one set of arrays, no copy of the
+  // committed strips). The helpers are done with the buffers first.
+  if (workers) workers->finish();
+  const auto at = [](auto& v, std::size_t k) { return v.begin() + static_cast<std::ptrdiff_t>(k); };
+  for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
+    if (strip_committed_[si] == steps_) continue;
+    const std::size_t begin = static_cast<std::size_t>(strip_offset_[si]);
+    const std::size_t end = begin + static_cast<std::size_t>(hairstyle_.strips[si].pointCount());
+    std::copy(at(positions_, begin), at(positions_, end), at(new_position_, begin));
+    std::copy(at(direction_, begin), at(direction_, end), at(new_direction_, begin));
+    std::copy(at(rate_, begin), at(rate_, end), at(new_rate_, begin));
+    std::copy(at(velocity_, begin), at(velocity_, end), at(new_velocity_, begin));
+    std::copy(at(previous_mid_, begin), at(previous_mid_, end), at(new_mid_, begin));
+  }
+  positions_.swap(new_position_);
+  direction_.swap(new_direction_);
+  rate_.swap(new_rate_);
+  velocity_.swap(new_velocity_);
+  previous_mid_.swap(new_mid_);
+}
+
+void Simulator::syncLaneBuffers() {
+  new_position_ = positions_;
+  new_direction_ = direction_;
+  new_rate_ = rate_;
+  new_velocity_ = velocity_;
+  new_mid_ = previous_mid_;
+  std::fill(strip_committed_.begin(), strip_committed_.end(), -1);
+  std::fill(moved_in_step_.begin(), moved_in_step_.end(), -1);
 }
 
 Simulator::~Simulator() = default;
@@ -347,20 +386,15 @@ void Simulator::setThreads(int threads) {
 
 int Simulator::threads() const { return workers_ ? workers_->helpers() + 1 : 1; }
 
-double Simulator::commitLanes(std::size_t begin, std::size_t end) {
-  const auto at = [](auto& v, std::size_t k) { return v.begin() + static_cast<std::ptrdiff_t>(k); };
-  std::copy(at(new_position_, begin), at(new_position_, end), at(positions_, begin));
-  std::copy(at(new_direction_, begin), at(new_direction_, end), at(direction_, begin));
-  std::copy(at(new_rate_, begin), at(new_rate_, end), at(rate_, begin));
-  std::copy(at(new_velocity_, begin), at(new_velocity_, end), at(velocity_, begin));
-  std::copy(at(new_mid_, begin), at(new_mid_, end), at(previous_mid_, begin));
-  std::fill(at(moved_in_step_, begin), at(moved_in_step_, end), steps_);
-  double max_rate2 = 0.0;
-  for (std::size_t i = begin; i < end; ++i) max_rate2 = std::max(max_rate2, rate_[i].squaredNorm());
-  return max_rate2;
+double Simulator::commitLanes(std::size_t i) {
+  positions_[i] = new_position_[i];
+  direction_[i] = new_direction_[i];
+  rate_[i] = new_rate_[i];
+  velocity_[i] = new_velocity_[i];
+  previous_mid_[i] = new_mid_[i];
+  moved_in_step_[i] = steps_;
+  return rate_[i].squaredNorm();
 }
-
-double Simulator::commitLanes(std::size_t i) { return commitLanes(i, i + 1); }
 
 void Simulator::fillLaneConstants() {
   const std::size_t stride = static_cast<std::size_t>(lane_stride_rows_) * lanes::kLanes;
@@ -451,6 +485,8 @@ void Simulator::reset() {
   max_penetration_ = 0.0;
   penetrations_ = 0;
   collisions_ = 0;
+  // The step numbers count again from 0: no point or strip may seem placed already in them.
+  syncLaneBuffers();
 }
 
 void Simulator::buildSprings() {
@@ -643,8 +679,8 @@ void Simulator::buildBandPairs() {
     bp.near2 = (lo * p.rest) * (lo * p.rest) * (1.0 + 1e-9);
     bp.far2 = p.within_strip ? (hi * p.rest) * (hi * p.rest) * (1.0 - 1e-9)
                              : std::numeric_limits<double>::infinity();
-    bp.same_strip = strip_of_point_[static_cast<std::size_t>(bp.later)] ==
-                    strip_of_point_[static_cast<std::size_t>(bp.earlier)];
+    bp.earlier_strip = strip_of_point_[static_cast<std::size_t>(bp.earlier)];
+    bp.same_strip = strip_of_point_[static_cast<std::size_t>(bp.later)] == bp.earlier_strip;
     pairs.push_back(bp);
     ++band_pair_start_[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)]) + 1];
   }
@@ -852,8 +888,8 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
         // Each pair is kept by the later of its two points in the sweep, against the final position
         // of the earlier one: partners not yet moved in this substep keep the pair themselves.
         const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
-        if (moved_in_step_[j] != steps_) continue;
-        const Vec3& other = positions_[j];
+        if (!placedInStep(j)) continue;
+        const Vec3& other = placedPosition(j);
         const Vec3 end = pivot + d * u;
         const double r = bandTarget((end - other).norm(), partner_rest_[static_cast<std::size_t>(q)]);
         if (r == 0.0) continue;
@@ -1334,8 +1370,8 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
   auto bandActs = [&](std::size_t i, const Vec3& end) {
     for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
       const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
-      if (moved_in_step_[j] != steps_) continue;
-      if (bandTarget((end - positions_[j]).norm(), partner_rest_[static_cast<std::size_t>(q)]) != 0.0)
+      if (!placedInStep(j)) continue;
+      if (bandTarget((end - placedPosition(j)).norm(), partner_rest_[static_cast<std::size_t>(q)]) != 0.0)
         return true;
     }
     return false;

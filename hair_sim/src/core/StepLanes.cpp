@@ -128,7 +128,8 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     q5 = splat<V>(0.0), q6 = splat<V>(0.0), q7 = splat<V>(0.0),
     q8 = splat<V>(1.0);  // rotation of the parent from its styled frame
   M flag = M{} & 0;
-  int first_row[N] = {};  // the first row flagged, per lane
+  int first_row[N] = {};        // the first row flagged, per lane
+  V max_rate2 = splat<V>(0.0);  // as std::max keeps it (a NaN never enters)
   for (int l = 0; l < N; ++l) {
     const int i0 = job.point[l0 + l];
     const Vec3 p = i0 >= 0 ? job.positions[i0] : Vec3::Zero();
@@ -253,6 +254,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     const V limit = max_step / sel(over, step_angle, splat<V>(1.0));
     Wx = sel(over, Wx * limit, Wx), Wy = sel(over, Wy * limit, Wy), Wz = sel(over, Wz * limit, Wz);
     const V a2 = Wx * Wx + Wy * Wy + Wz * Wz;
+    max_rate2 = sel(active & (max_rate2 < a2), a2, max_rate2);
     const M small = a2 < 0.01;
     const M tiny = a2 < 1e-24;
     const V crx = Wy * nz - Wz * ny, cry = Wz * nx - Wx * nz, crz = Wx * ny - Wy * nx;
@@ -379,7 +381,10 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     for (int l = 0; l < N; ++l)
       if (flag[l] && first_row[l] == 0) first_row[l] = r;
   }
-  for (int l = 0; l < N; ++l) job.first_flagged_row[l0 + l] = first_row[l];
+  for (int l = 0; l < N; ++l) {
+    job.first_flagged_row[l0 + l] = first_row[l];
+    job.max_rate2[l0 + l] = max_rate2[l];
+  }
 }
 
 /// Pairs [begin, end) of scanSprings, N at a time and the rest one by one, with the same arithmetic: the

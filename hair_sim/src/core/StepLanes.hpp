@@ -65,6 +65,8 @@ struct BlockJob {
   const Mat3* head_rotation_inverse = nullptr;
   /// Out: per lane, the first row from which the exact step must take over (0: none).
   int first_flagged_row[kLanes] = {};
+  /// Out: per lane, the largest |w|^2 of its new rates (as Eigen's squaredNorm computes it), 0 for none.
+  double max_rate2[kLanes] = {};
 };
 
 /// Values per lane and row in BlockJob::constants.

@@ -201,10 +201,23 @@ class Simulator {
   void stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally);
   /// lane_constants_ from the segment constants (buildLanes, setParameters).
   void fillLaneConstants();
-  /// Point i takes the lanes' result (new_*_) as its state at the end of the substep; returns |w|^2.
+  /// Point i takes the lanes' result (new_*_) as its state at the end of the substep (the exact step of its
+  /// strip); returns |w|^2.
   double commitLanes(std::size_t i);
-  /// commitLanes for the points [begin, end) (a strip's points below its roots), as block copies.
-  double commitLanes(std::size_t begin, std::size_t end);
+  /// During a substep: whether point j already has its place at the end of it (placed by the exact step, or
+  /// in a strip committed from the lanes), and that place (new_position_ for a strip committed from the
+  /// lanes, which stepLanes' buffer swap makes the state at the end).
+  bool placedInStep(std::size_t j) const {
+    return moved_in_step_[j] == steps_ ||
+           strip_committed_[static_cast<std::size_t>(strip_of_point_[j])] == steps_;
+  }
+  const Vec3& placedPosition(std::size_t j) const {
+    return strip_committed_[static_cast<std::size_t>(strip_of_point_[j])] == steps_ ? new_position_[j]
+                                                                                    : positions_[j];
+  }
+  /// The lanes' buffers (new_*_) equal to the state (reset: the roots, which no substep writes, must be the
+  /// same in both when stepLanes swaps them).
+  void syncLaneBuffers();
   /// Inertia floors (1 / I) and compensated rest directions from the lengths, styled directions and params_.
   void updateSegmentConstants();
   void buildSprings();
@@ -308,6 +321,7 @@ class Simulator {
     int later = 0, earlier = 0;
     double near2 = 0.0, far2 = 0.0;  ///< squared band edges, 1e-9 relative to spare
     bool same_strip = false;
+    int earlier_strip = 0;  ///< the strip of `earlier`
   };
   std::vector<BandPair> band_pairs_;
   std::vector<int> band_pair_start_;  ///< per strip, CSR into band_pairs_
@@ -339,13 +353,20 @@ class Simulator {
   int exact_strips_ = 0;
   std::vector<int> block_rows_, block_margin_, lane_point_, lane_strip_;
   int lane_stride_rows_ = 0;  ///< rows per block in lane_point_
+  /// The lanes' results, the state at the end of the substep for the strips committed from them: stepLanes
+  /// swaps them with the state (positions_, direction_, rate_, velocity_, previous_mid_) after copying in the
+  /// strips that took the exact step.
   std::vector<Vec3> new_position_, new_direction_, new_rate_, new_velocity_, new_mid_;
+  /// Per strip, the substep (steps_) in which it was last committed from the lanes (-1: none since reset).
+  std::vector<long> strip_committed_;
   /// Per strip, the first place of its sweep (column * rows + row) that takes the exact step, or kNoExact.
   std::vector<int> strip_exact_from_;
   static constexpr int kNoExact = 1 << 30;
   std::vector<lanes::LaneBody> lane_bodies_;  ///< [margin][body], this substep
   std::vector<int> strip_last_block_;         ///< per strip, the block of its last chain
   std::vector<int> block_flags_;              ///< [block][lane]: lanes::BlockJob::first_flagged_row
+  std::vector<double> chain_max_rate2_;       ///< [block][lane]: lanes::BlockJob::max_rate2
+  std::vector<int> strip_first_chain_;        ///< per strip, block * kLanes + lane of its column 0
   std::vector<unsigned char> lane_flag_;      ///< per point: lanes::BlockJob::out_flag
   std::vector<double> lane_constants_;        ///< per block: lanes::BlockJob::constants
   std::unique_ptr<LaneWorkers> workers_;      ///< the helper threads (setThreads), or none
