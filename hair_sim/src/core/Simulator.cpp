@@ -744,9 +744,10 @@ std::vector<Ellipsoid> Simulator::bodiesInHeadFrame(const Iso3& head_pose, const
 
 namespace {
 
-/// Does the straight path q0 -> q1 (sphere space) enter the unit sphere from outside?
-bool pathEntersUnitSphere(const Vec3& q0, const Vec3& q1) {
-  const double c = q0.squaredNorm() - 1.0;
+/// Does the straight path q0 -> q1 (sphere space) enter the unit sphere from outside? c0 = |q0|^2 - 1 (as
+/// q0.squaredNorm() - 1.0: prepareBodies keeps it per body, the same for every direction probed).
+bool pathEntersUnitSphere(const Vec3& q0, double c0, const Vec3& q1) {
+  const double c = c0;
   if (c <= 0.0) return false;  // starts inside: not an entry (handled as "inside")
   const Vec3 d = q1 - q0;
   const double a = d.squaredNorm();
@@ -776,6 +777,8 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
     is_near_.resize(nb);
     q_pivot_.resize(nb);
     q_prev_.resize(nb);
+    c_pivot_.resize(nb);
+    c_prev_.resize(nb);
     pivot_inside_.resize(nb);
     near_.reserve(nb);
   }
@@ -826,6 +829,8 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
     }
     is_near_[b] = far ? 0 : 1;
     if (far) continue;
+    c_pivot_[b] = n2 - 1.0;
+    if (!before.empty()) c_prev_[b] = q_prev_[b].squaredNorm() - 1.0;
     near_.push_back(b);
   }
 }
@@ -835,9 +840,9 @@ bool Simulator::clearOf(std::size_t b, double d, const Vec3& u, const std::vecto
   if (!is_near_[b]) return true;
   const Vec3 q_end = q_pivot_[b] + d * (now[b].Sinv() * u);
   if (q_end.squaredNorm() - 1.0 <= 1e-12) return false;
-  if (pivot_inside_[b] || clear_level_ >= 2) return true;      // a root inside its scalp: only the end counts
-  if (pathEntersUnitSphere(q_pivot_[b], q_end)) return false;  // the segment cuts through
-  if (have_before && clear_level_ == 0 && pathEntersUnitSphere(q_prev_[b], q_end)) return false;
+  if (pivot_inside_[b] || clear_level_ >= 2) return true;  // a root inside its scalp: only the end counts
+  if (pathEntersUnitSphere(q_pivot_[b], c_pivot_[b], q_end)) return false;  // the segment cuts through
+  if (have_before && clear_level_ == 0 && pathEntersUnitSphere(q_prev_[b], c_prev_[b], q_end)) return false;
   return true;
 }
 

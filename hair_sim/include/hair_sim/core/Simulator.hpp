@@ -305,6 +305,7 @@ class Simulator {
   // sphere space of each body.
   std::vector<std::size_t> near_;
   std::vector<Vec3> q_pivot_, q_prev_;
+  std::vector<double> c_pivot_, c_prev_;  ///< |q|^2 - 1 of q_pivot_, q_prev_ (bodies within reach)
   std::vector<char> pivot_inside_, is_near_;
   /// clearOf's tests: 0 all, 1 without the swept test, 2 the end point alone (resolveCollisions' fallbacks).
   int clear_level_ = 0;
