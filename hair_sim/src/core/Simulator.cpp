@@ -317,12 +317,10 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     };
     for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {
       const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
+      // (An earlier strip's final place is in the lanes' buffers: its lanes' result, or its exact step's,
+      // copied there below.)
       const Vec3& a = new_position_[static_cast<std::size_t>(bp.later)];
-      // (An earlier strip's place: the lanes' if it was committed from them.)
-      const Vec3& b =
-          (bp.same_strip || strip_committed_[static_cast<std::size_t>(bp.earlier_strip)] == steps_)
-              ? new_position_[static_cast<std::size_t>(bp.earlier)]
-              : positions_[static_cast<std::size_t>(bp.earlier)];
+      const Vec3& b = new_position_[static_cast<std::size_t>(bp.earlier)];
       const double dist2 = (a - b).squaredNorm();
       if (dist2 < bp.near2 || dist2 > bp.far2)  // kept by the later point of the pair in the sweep
         from = std::min(
@@ -331,6 +329,16 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     if (from != kNoExact) {
       stepStrip(in, f, si, strip_offset_[si], tally, from, true);
       ++exact_strips_;
+      // Its state at the end of the substep into the lanes' buffers, which become the state below (the
+      // helpers are done with its blocks: they were read above).
+      const auto at = [](auto& v, std::size_t k) { return v.begin() + static_cast<std::ptrdiff_t>(k); };
+      const std::size_t begin = static_cast<std::size_t>(base);
+      const std::size_t end = begin + static_cast<std::size_t>(s.pointCount());
+      std::copy(at(positions_, begin), at(positions_, end), at(new_position_, begin));
+      std::copy(at(direction_, begin), at(direction_, end), at(new_direction_, begin));
+      std::copy(at(rate_, begin), at(rate_, end), at(new_rate_, begin));
+      std::copy(at(velocity_, begin), at(velocity_, end), at(new_velocity_, begin));
+      std::copy(at(previous_mid_, begin), at(previous_mid_, end), at(new_mid_, begin));
       continue;
     }
     // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
@@ -339,21 +347,9 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     for (int c = 0; c < s.columns; ++c) max_rate2 = std::max(max_rate2, chain_max_rate2_[chain + c]);
   }
   tally.max_rate2 = std::max(tally.max_rate2, max_rate2);
-  // The strips that took the exact step have their state in positions_ etc.: copied into the lanes' buffers,
-  // which then become the state (every strip's end-of-substep state in one set of arrays, no copy of the
-  // committed strips). The helpers are done with the buffers first.
+  // The lanes' buffers hold every strip's state at the end of the substep: they become the state (no copy of
+  // the strips committed from the lanes). The helpers are done with them first.
   if (workers) workers->finish();
-  const auto at = [](auto& v, std::size_t k) { return v.begin() + static_cast<std::ptrdiff_t>(k); };
-  for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
-    if (strip_committed_[si] == steps_) continue;
-    const std::size_t begin = static_cast<std::size_t>(strip_offset_[si]);
-    const std::size_t end = begin + static_cast<std::size_t>(hairstyle_.strips[si].pointCount());
-    std::copy(at(positions_, begin), at(positions_, end), at(new_position_, begin));
-    std::copy(at(direction_, begin), at(direction_, end), at(new_direction_, begin));
-    std::copy(at(rate_, begin), at(rate_, end), at(new_rate_, begin));
-    std::copy(at(velocity_, begin), at(velocity_, end), at(new_velocity_, begin));
-    std::copy(at(previous_mid_, begin), at(previous_mid_, end), at(new_mid_, begin));
-  }
   positions_.swap(new_position_);
   direction_.swap(new_direction_);
   rate_.swap(new_rate_);
@@ -679,8 +675,8 @@ void Simulator::buildBandPairs() {
     bp.near2 = (lo * p.rest) * (lo * p.rest) * (1.0 + 1e-9);
     bp.far2 = p.within_strip ? (hi * p.rest) * (hi * p.rest) * (1.0 - 1e-9)
                              : std::numeric_limits<double>::infinity();
-    bp.earlier_strip = strip_of_point_[static_cast<std::size_t>(bp.earlier)];
-    bp.same_strip = strip_of_point_[static_cast<std::size_t>(bp.later)] == bp.earlier_strip;
+    bp.same_strip = strip_of_point_[static_cast<std::size_t>(bp.later)] ==
+                    strip_of_point_[static_cast<std::size_t>(bp.earlier)];
     pairs.push_back(bp);
     ++band_pair_start_[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)]) + 1];
   }

@@ -322,7 +322,6 @@ class Simulator {
     int later = 0, earlier = 0;
     double near2 = 0.0, far2 = 0.0;  ///< squared band edges, 1e-9 relative to spare
     bool same_strip = false;
-    int earlier_strip = 0;  ///< the strip of `earlier`
   };
   std::vector<BandPair> band_pairs_;
   std::vector<int> band_pair_start_;  ///< per strip, CSR into band_pairs_
