@@ -1,6 +1,7 @@
 #include "hair_sim/core/Simulator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -688,37 +689,111 @@ void Simulator::buildBandPairs() {
         fill[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)])]++)] = bp;
 }
 
+namespace {
+
+/// The extremes of computeSpringForces over the spring pairs: (length / rest)^2 within strips and between
+/// strips, and the smallest squared length between strips. A NaN never enters them (std::min / std::max).
+struct SpringExtremes {
+  double min_within = 1e300, max_within = 0.0, min_between = 1e300, max_between = 0.0, min_gap2 = 1e300;
+};
+
+/// computeSpringForces' scan of pairs [begin, end) (pairs below `within` are within strips, the others
+/// between them): pair k joins points a[k] and b[k], r2 = |positions[b] - positions[a]|^2 inv_rest2[k].
+/// Updates the extremes and writes the pairs outside the band (r2 < lo2 or r2 > hi2) to `outside` in order;
+/// returns how many. (Scalar: in lanes of AVX2, gathering the points, it took more time on this machine.)
+template <bool kBetween>
+std::size_t scanSpringRange(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
+                            std::size_t begin, std::size_t end, double lo2, double hi2, double& min_r2,
+                            double& max_r2, double& min_l2, int* outside, std::size_t found) {
+  for (std::size_t k = begin; k < end; ++k) {
+    const Vec3 delta = positions[b[k]] - positions[a[k]];
+    const double l2 = delta.squaredNorm();
+    const double r2 = l2 * inv_rest2[k];
+    min_r2 = std::min(min_r2, r2);
+    max_r2 = std::max(max_r2, r2);
+    if constexpr (kBetween) min_l2 = std::min(min_l2, l2);
+    if (r2 < lo2 || r2 > hi2) outside[found++] = static_cast<int>(k);
+  }
+  return found;
+}
+
+std::size_t scanSprings(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
+                        std::size_t begin, std::size_t within, std::size_t end, double lo2, double hi2,
+                        SpringExtremes& e, int* outside) {
+  double unused = 0.0;
+  const std::size_t split = std::min(std::max(begin, within), end);
+  const std::size_t found = scanSpringRange<false>(positions, a, b, inv_rest2, begin, split, lo2, hi2,
+                                                   e.min_within, e.max_within, unused, outside, 0);
+  return scanSpringRange<true>(positions, a, b, inv_rest2, split, end, lo2, hi2, e.min_between, e.max_between,
+                               e.min_gap2, outside, found);
+}
+
+}  // namespace
+
 void Simulator::computeSpringForces() {
   // Only the points the last substep's springs pushed have a force to clear.
   for (int i : spring_touched_) spring_force_[static_cast<std::size_t>(i)].setZero();
   spring_touched_.clear();
   const double ks = params_.spring_stiffness;
   const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
-  // The scan (in lanes) finds the extremes and the pairs outside their dead band (most pairs are within it:
-  // no square root, no division); then (11) for those, in pair order: x = stretch beyond the band, F = -k_s
-  // x along the pair (none for a NaN, which the scan does not list).
-  lanes::SpringExtremes e;
-  const std::size_t outside = lanes::scanSprings(
-      positions_.data(), spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(), spring_within_,
-      springs_.size(), lo * lo, hi * hi, e, spring_outside_.data(), step_path_ == StepPath::LanesBaseline);
+  // The scan (scanSprings) finds the extremes and the pairs outside their dead band (most pairs are within
+  // it: no square root, no division); then (11) for those, in pair order: x = stretch beyond the band, F =
+  // -k_s x along the pair (none for a NaN, which the scan does not list). With helper threads (as many parts
+  // as threads), each part of the pairs is scanned on any thread into its own extremes and its own stretch
+  // of spring_outside_; the forces then go in pair order.
+  const std::size_t count = springs_.size();
+  LaneWorkers* workers = count >= kMinPairsForHelpers ? workers_.get() : nullptr;
+  const std::size_t parts = workers ? static_cast<std::size_t>(threads()) : 1;
+  struct Part {
+    std::size_t begin = 0, end = 0, found = 0;
+    SpringExtremes e;
+  };
+  std::array<Part, 64> part;
+  const double lo2 = lo * lo, hi2 = hi * hi;
+  auto scan = [&](std::size_t c) {
+    Part& pc = part[c];
+    pc.found =
+        scanSprings(positions_.data(), spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(), pc.begin,
+                    spring_within_, pc.end, lo2, hi2, pc.e, spring_outside_.data() + pc.begin);
+  };
+  for (std::size_t c = 0; c < parts; ++c) {
+    part[c].begin = count * c / parts;
+    part[c].end = count * (c + 1) / parts;
+  }
+  if (workers) {
+    workers->start(
+        parts, [](void* run, std::size_t c) { (*static_cast<decltype(scan)*>(run))(c); }, &scan);
+    workers->finish();
+  } else {
+    scan(0);
+  }
+  SpringExtremes e;
+  for (std::size_t c = 0; c < parts; ++c) {
+    e.min_within = std::min(e.min_within, part[c].e.min_within);
+    e.max_within = std::max(e.max_within, part[c].e.max_within);
+    e.min_between = std::min(e.min_between, part[c].e.min_between);
+    e.max_between = std::max(e.max_between, part[c].e.max_between);
+    e.min_gap2 = std::min(e.min_gap2, part[c].e.min_gap2);
+  }
   const Vec3* pos = positions_.data();
   Vec3* force = spring_force_.data();
-  for (std::size_t n = 0; n < outside; ++n) {
-    const std::size_t k = static_cast<std::size_t>(spring_outside_[n]);
-    const SpringPair& p = springs_[k];
-    const Vec3 delta = pos[p.b] - pos[p.a];
-    const double l2 = delta.squaredNorm();
-    const double r2 = l2 * spring_inv_rest2_[k];
-    const double length = std::sqrt(l2);
-    const double x = r2 < lo * lo ? length - lo * p.rest : length - hi * p.rest;
-    if (x == 0.0 || length < 1e-12) continue;
-    const Vec3 f =
-        (ks * x / length) * delta;  // pulls a toward b when stretched, pushes apart when compressed
-    force[p.a] += f;
-    force[p.b] -= f;
-    spring_touched_.push_back(p.a);
-    spring_touched_.push_back(p.b);
-  }
+  for (std::size_t c = 0; c < parts; ++c)
+    for (std::size_t n = part[c].begin; n < part[c].begin + part[c].found; ++n) {
+      const std::size_t k = static_cast<std::size_t>(spring_outside_[n]);
+      const SpringPair& p = springs_[k];
+      const Vec3 delta = pos[p.b] - pos[p.a];
+      const double l2 = delta.squaredNorm();
+      const double r2 = l2 * spring_inv_rest2_[k];
+      const double length = std::sqrt(l2);
+      const double x = r2 < lo * lo ? length - lo * p.rest : length - hi * p.rest;
+      if (x == 0.0 || length < 1e-12) continue;
+      const Vec3 f =
+          (ks * x / length) * delta;  // pulls a toward b when stretched, pushes apart when compressed
+      force[p.a] += f;
+      force[p.b] -= f;
+      spring_touched_.push_back(p.a);
+      spring_touched_.push_back(p.b);
+    }
   auto ratio = [](double r2, double none) { return r2 == none ? 1.0 : std::sqrt(r2); };
   min_ratio_[0] = ratio(e.min_between, 1e300), max_ratio_[0] = ratio(e.max_between, 0.0);
   min_ratio_[1] = ratio(e.min_within, 1e300), max_ratio_[1] = ratio(e.max_within, 0.0);

@@ -387,73 +387,6 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
   }
 }
 
-/// Pairs [begin, end) of scanSprings, N at a time and the rest one by one, with the same arithmetic: the
-/// extremes as std::min / std::max keep them (a NaN r2 never replaces one), the pairs outside the band in
-/// order.
-template <int N, bool kBetween>
-HAIR_SIM_ALWAYS_INLINE std::size_t scanSpringRange(const Vec3* positions, const int* a, const int* b,
-                                                   const double* inv_rest2, std::size_t begin,
-                                                   std::size_t end, double lo2, double hi2, double& min_r2,
-                                                   double& max_r2, double& min_l2, int* outside,
-                                                   std::size_t found) {
-  typedef typename VecTypes<N>::V V;
-  typedef typename VecTypes<N>::M M;
-  const double* p = reinterpret_cast<const double*>(positions);
-  V vmin = splat<V>(min_r2), vmax = splat<V>(max_r2), vgap = splat<V>(min_l2);
-  std::size_t k = begin;
-  for (; k + N <= end; k += N) {
-    V dx, dy, dz, inv;
-    for (int l = 0; l < N; ++l) {
-      const double* pa = p + 3 * static_cast<std::ptrdiff_t>(a[k + l]);
-      const double* pb = p + 3 * static_cast<std::ptrdiff_t>(b[k + l]);
-      dx[l] = pb[0] - pa[0], dy[l] = pb[1] - pa[1], dz[l] = pb[2] - pa[2];
-    }
-    __builtin_memcpy(&inv, inv_rest2 + k, sizeof(V));
-    const V l2 = (dx * dx + dy * dy) + dz * dz;
-    const V r2 = l2 * inv;
-    vmin = sel(r2 < vmin, r2, vmin);
-    vmax = sel(vmax < r2, r2, vmax);
-    if constexpr (kBetween) vgap = sel(l2 < vgap, l2, vgap);
-    const M out = (r2 < lo2) | (r2 > hi2);
-    if (anyLane(out))
-      for (int l = 0; l < N; ++l)
-        if (out[l]) outside[found++] = static_cast<int>(k + l);
-  }
-  for (int l = 0; l < N; ++l) {
-    min_r2 = std::min(min_r2, vmin[l]);
-    max_r2 = std::max(max_r2, vmax[l]);
-    if constexpr (kBetween) min_l2 = std::min(min_l2, vgap[l]);
-  }
-  for (; k < end; ++k) {
-    const Vec3 delta = positions[b[k]] - positions[a[k]];
-    const double l2 = delta.squaredNorm();
-    const double r2 = l2 * inv_rest2[k];
-    min_r2 = std::min(min_r2, r2);
-    max_r2 = std::max(max_r2, r2);
-    if constexpr (kBetween) min_l2 = std::min(min_l2, l2);
-    if (r2 < lo2 || r2 > hi2) outside[found++] = static_cast<int>(k);
-  }
-  return found;
-}
-
-template <int N>
-HAIR_SIM_ALWAYS_INLINE std::size_t scanSpringsBody(const Vec3* positions, const int* a, const int* b,
-                                                   const double* inv_rest2, std::size_t within,
-                                                   std::size_t count, double lo2, double hi2,
-                                                   SpringExtremes& e, int* outside) {
-  double unused = 0.0;
-  std::size_t found = scanSpringRange<N, false>(positions, a, b, inv_rest2, 0, within, lo2, hi2, e.min_within,
-                                                e.max_within, unused, outside, 0);
-  return scanSpringRange<N, true>(positions, a, b, inv_rest2, within, count, lo2, hi2, e.min_between,
-                                  e.max_between, e.min_gap2, outside, found);
-}
-
-std::size_t scanSpringsBaseline(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
-                                std::size_t within, std::size_t count, double lo2, double hi2,
-                                SpringExtremes& e, int* outside) {
-  return scanSpringsBody<2>(positions, a, b, inv_rest2, within, count, lo2, hi2, e, outside);
-}
-
 void stepBlockBaseline(BlockJob& job) {
   for (int l0 = 0; l0 < W; l0 += 2) blockBody<2>(job, l0);
 }
@@ -462,13 +395,6 @@ void stepBlockBaseline(BlockJob& job) {
 __attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) {
   static_assert(W % 4 == 0, "blocks of whole AVX2 vectors");
   for (int l0 = 0; l0 < W; l0 += 4) blockBody<4>(job, l0);
-}
-
-__attribute__((target("avx2"))) std::size_t scanSpringsAvx2(const Vec3* positions, const int* a, const int* b,
-                                                            const double* inv_rest2, std::size_t within,
-                                                            std::size_t count, double lo2, double hi2,
-                                                            SpringExtremes& e, int* outside) {
-  return scanSpringsBody<4>(positions, a, b, inv_rest2, within, count, lo2, hi2, e, outside);
 }
 #endif
 
@@ -499,17 +425,6 @@ void stepBlock(BlockJob& job, bool baseline_only) {
 #endif
   (void)baseline_only;
   stepBlockBaseline(job);
-}
-
-std::size_t scanSprings(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
-                        std::size_t within, std::size_t count, double lo2, double hi2,
-                        SpringExtremes& extremes, int* outside, bool baseline_only) {
-#if defined(HAIR_SIM_AVX2_DISPATCH)
-  if (!baseline_only && haveAvx2())
-    return scanSpringsAvx2(positions, a, b, inv_rest2, within, count, lo2, hi2, extremes, outside);
-#endif
-  (void)baseline_only;
-  return scanSpringsBaseline(positions, a, b, inv_rest2, within, count, lo2, hi2, extremes, outside);
 }
 
 }  // namespace lanes

@@ -82,20 +82,5 @@ void stepBlock(BlockJob& job, bool baseline_only);
 /// Whether stepBlock uses AVX2 on this CPU.
 bool haveAvx2();
 
-/// The extremes of Simulator::computeSpringForces over the spring pairs: (length / rest)^2 within strips
-/// and between strips, and the smallest squared length between strips. A NaN never enters them.
-struct SpringExtremes {
-  double min_within = 1e300, max_within = 0.0, min_between = 1e300, max_between = 0.0, min_gap2 = 1e300;
-};
-
-/// The spring pairs' scan of Simulator::computeSpringForces, a few pairs per instruction: pair k joins points
-/// a[k] and b[k], r2 = |positions[b] - positions[a]|^2 inv_rest2[k] (computed as the scalar code does: the
-/// same bits); pairs [0, within) are within strips, [within, count) between them. Updates `extremes` and
-/// writes the indices of the pairs outside the band (r2 < lo2 or r2 > hi2) to `outside` in order (room for
-/// count); returns how many. AVX2 when the CPU has it unless baseline_only; the same results either way.
-std::size_t scanSprings(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
-                        std::size_t within, std::size_t count, double lo2, double hi2,
-                        SpringExtremes& extremes, int* outside, bool baseline_only);
-
 }  // namespace lanes
 }  // namespace hair_sim

@@ -371,6 +371,9 @@ class Simulator {
   std::vector<double> lane_constants_;        ///< per block: lanes::BlockJob::constants
   std::unique_ptr<LaneWorkers> workers_;      ///< the helper threads (setThreads), or none
   static constexpr std::size_t kMinBlocksForHelpers = 128;  ///< 512 chains, 256 strips of 2 columns
+  /// computeSpringForces' scan on the helper threads from this many pairs (about kMinBlocksForHelpers'
+  /// strips).
+  static constexpr std::size_t kMinPairsForHelpers = 4096;
 };
 
 /// Rotation vector that turns unit a onto unit b (axis a x b, angle in [0, pi]); a deterministic
