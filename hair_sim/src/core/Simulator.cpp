@@ -215,6 +215,9 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       lb.bound_radius = bound.radius;
       lb.motion = bound.motion;
       lb.shift = bound.shift;
+      lb.grow = 1.0 + bound.motion;
+      lb.keep2 = (1.0 - bound.motion) * (1.0 - bound.motion);
+      lb.slow = bound.motion < 0.5 ? -1 : 0;
     }
   std::fill(strip_exact_from_.begin(), strip_exact_from_.end(), kNoExact);
 

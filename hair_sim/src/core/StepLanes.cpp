@@ -110,8 +110,8 @@ HAIR_SIM_ALWAYS_INLINE auto pathEnters(V q0x, V q0y, V q0z, V q1x, V q1y, V q1z)
   return (c > 0.0) & a_ok & (b < 0.0) & (disc >= 0.0) & ((lhs <= 0.0) | (lhs * lhs <= disc));
 }
 
-/// Lanes l0 .. l0 + N - 1 of the block.
-template <int N>
+/// Lanes l0 .. l0 + N - 1 of the block; have_before = job.have_before.
+template <int N, bool have_before>
 HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
   typedef typename VecTypes<N>::V V;
   typedef typename VecTypes<N>::M M;
@@ -307,7 +307,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     // tests: the end inside now (reaction constraint), or the new segment / the end's path over the
     // substep not clear of the body (Simulator::clearOf): the exact step decides.
     V reach_prev = splat<V>(0.0);
-    if (job.have_before) {
+    if (have_before) {
       const V gx1 = ex - px, gy1 = ey - py, gz1 = ez - pz;
       reach_prev = vsqrt(gx1 * gx1 + gy1 * gy1 + gz1 * gz1);
     }
@@ -317,10 +317,9 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       const V dist2 = dx * dx + dy * dy + dz * dz;
       const V rch = B.bound_radius + d;
       M far = dist2 > rch * rch;
-      if (job.have_before) {
-        const V lim = B.bound_radius + (reach_prev + B.shift) * (1.0 + B.motion);
-        const double keep_b = 1.0 - B.motion;
-        far = B.motion < 0.5 ? (far & (dist2 * (keep_b * keep_b) > lim * lim)) : (far & 0);
+      if (have_before) {
+        const V lim = B.bound_radius + (reach_prev + B.shift) * B.grow;
+        far = far & (dist2 * B.keep2 > lim * lim) & B.slow;
       }
       const M reach = ~far & active;
       if (!anyLane(reach)) continue;
@@ -334,7 +333,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       const V lim = 1.0 + d / B.min_radius + 1e-9;
       M far2 = n2 > lim * lim;
       V bx1 = splat<V>(0.0), by1 = splat<V>(0.0), bz1 = splat<V>(0.0);
-      if (job.have_before) {
+      if (have_before) {
         const V ddx = ex - B.centre_before[0], ddy = ey - B.centre_before[1], ddz = ez - B.centre_before[2];
         bx1 = Sb[0] * ddx + Sb[1] * ddy + Sb[2] * ddz;
         by1 = Sb[3] * ddx + Sb[4] * ddy + Sb[5] * ddz;
@@ -356,7 +355,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       const M end_in = (qex * qex + qey * qey + qez * qez) - 1.0 <= 1e-12;
       const M cuts = ~pivot_inside & pathEnters(qx, qy, qz, qex, qey, qez);
       M swept = M{} & 0;
-      if (job.have_before) swept = ~pivot_inside & pathEnters(bx1, by1, bz1, qex, qey, qez);
+      if (have_before) swept = ~pivot_inside & pathEnters(bx1, by1, bz1, qex, qey, qez);
       const M acting = reach & ~far2;
       full = full | (acting & inside_now);
       hit = hit | (acting & (end_in | cuts | swept));
@@ -388,13 +387,15 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
 }
 
 void stepBlockBaseline(BlockJob& job) {
-  for (int l0 = 0; l0 < W; l0 += 2) blockBody<2>(job, l0);
+  for (int l0 = 0; l0 < W; l0 += 2)
+    job.have_before ? blockBody<2, true>(job, l0) : blockBody<2, false>(job, l0);
 }
 
 #if defined(HAIR_SIM_AVX2_DISPATCH)
 __attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) {
   static_assert(W % 4 == 0, "blocks of whole AVX2 vectors");
-  for (int l0 = 0; l0 < W; l0 += 4) blockBody<4>(job, l0);
+  for (int l0 = 0; l0 < W; l0 += 4)
+    job.have_before ? blockBody<4, true>(job, l0) : blockBody<4, false>(job, l0);
 }
 #endif
 

@@ -61,6 +61,10 @@ struct LaneBody {
   double bound_radius;  ///< ball about the centre that holds the body (see Simulator::BodyBound)
   double motion;
   double shift;
+  // Of the motion, for the quick reject: 1 + motion, (1 - motion)^2, and whether motion < 0.5 (-1 or 0).
+  double grow;
+  double keep2;
+  long slow;
 };
 }  // namespace lanes
 
