@@ -290,8 +290,11 @@ TEST(SimulatorTest, IdenticalInputsGiveBitIdenticalResults) {
 /// step paths of Simulator::StepPath on the same inputs. Returns the control points after `steps` substeps
 /// and the strips that went to the exact step over the run.
 /// The default hairstyle, or (generated_strips > 0) one generated with that many strips.
+/// measures: the spring measures after the last substep (minSpringRatio and maxSpringRatio within and
+/// between strips, minStripGap).
 std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude, long* exact_strips = nullptr,
-                          double* max_penetration = nullptr, int threads = 1, int generated_strips = 0) {
+                          double* max_penetration = nullptr, int threads = 1, int generated_strips = 0,
+                          std::vector<double>* measures = nullptr) {
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
   Iso3 head_rest = Iso3::Identity();
   head_rest.translation() = Vec3(0.0, 0.0, 1.6);
@@ -324,6 +327,9 @@ std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude,
   }
   if (exact_strips) *exact_strips = exact;
   if (max_penetration) *max_penetration = penetration;
+  if (measures)
+    *measures = {sim.minSpringRatio(true), sim.maxSpringRatio(true), sim.minSpringRatio(false),
+                 sim.maxSpringRatio(false), sim.minStripGap()};
   return sim.positionsHead();
 }
 
@@ -346,14 +352,24 @@ TEST(SimulatorTest, LanePathGivesTheSameBitsWithAndWithoutAvx2) {
 
 TEST(SimulatorTest, HelperThreadsGiveTheSameBits) {
   // Helper threads only compute blocks of chains (each from its own chains' state at the start of the
-  // substep); the calling thread commits the strips in order: any thread count gives the same hair. 600
-  // strips (300 blocks of 4 chains): over the 128 blocks from which the helpers take part.
+  // substep) and scan parts of the spring pairs (each into its own extremes and list); the calling thread
+  // commits the strips in order and adds the forces in pair order: any thread count gives the same hair and
+  // the same spring measures. 600 strips (300 blocks of 4 chains, over 4,096 pairs): over the 128 blocks
+  // and the pairs from which the helpers take part.
   long exact1 = 0, exact2 = 0, exact3 = 0;
   const int steps = 120, strips = 600;
-  const std::vector<Vec3> one = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact1, nullptr, 1, strips);
-  const std::vector<Vec3> two = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact2, nullptr, 2, strips);
+  std::vector<double> measures1, measures2, measures3;
+  const std::vector<Vec3> one =
+      runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact1, nullptr, 1, strips, &measures1);
+  const std::vector<Vec3> two =
+      runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact2, nullptr, 2, strips, &measures2);
   const std::vector<Vec3> three =
-      runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact3, nullptr, 3, strips);
+      runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact3, nullptr, 3, strips, &measures3);
+  EXPECT_EQ(measures1, measures2);
+  EXPECT_EQ(measures1, measures3);
+  ASSERT_EQ(measures1.size(), 5u);
+  EXPECT_LT(measures1[0], measures1[1]);  // the strips' widths moved
+  EXPECT_GT(measures1[4], 0.0);
   const std::vector<Vec3> baseline2 =
       runPath(Simulator::StepPath::LanesBaseline, steps, 1.0, nullptr, nullptr, 2, strips);
   ASSERT_EQ(one.size(), two.size());
@@ -636,6 +652,10 @@ TEST(SimulatorTest, SetParametersWithoutSpringsDropsTheirForce) {
   toggled.step(in);
   toggled.setParameters(off);
   ASSERT_TRUE(toggled.springs().empty());
+  // Nor do their measures stay: those of a Simulator without springs.
+  EXPECT_EQ(toggled.minSpringRatio(true), 1.0);
+  EXPECT_EQ(toggled.maxSpringRatio(true), 1.0);
+  EXPECT_EQ(toggled.minStripGap(), 0.0);
   toggled.setShape(shape);
   toggled.step(in);
   Simulator without(style, off);

@@ -1,6 +1,7 @@
 #pragma once
-/// Internal to the core: the helper threads of Simulator::setThreads. Each substep of the Lanes path hands
-/// them its blocks of chains (lanes::stepBlock, which reads only the block's own chains at the start of
+/// Internal to the core: the helper threads of Simulator::setThreads. Each substep hands them parts of the
+/// spring pairs to scan (computeSpringForces, each part into its own outputs) and, on the Lanes path, its
+/// blocks of chains (lanes::stepBlock, which reads only the block's own chains at the start of
 /// the substep and writes only their new state); the calling thread commits the strips in order as their
 /// blocks complete and computes blocks itself while it waits. Which thread computes a block does not change
 /// its result, so the hair is the same bit for bit with any number of threads.

@@ -346,7 +346,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       continue;
     }
     // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
-    strip_committed_[si] = steps_;
+    strip_committed_[si] = sweep_;
     const std::size_t chain = static_cast<std::size_t>(strip_first_chain_[si]);
     for (int c = 0; c < s.columns; ++c) max_rate2 = std::max(max_rate2, chain_max_rate2_[chain + c]);
   }
@@ -367,8 +367,6 @@ void Simulator::syncLaneBuffers() {
   new_rate_ = rate_;
   new_velocity_ = velocity_;
   new_mid_ = previous_mid_;
-  std::fill(strip_committed_.begin(), strip_committed_.end(), -1);
-  std::fill(moved_in_step_.begin(), moved_in_step_.end(), -1);
 }
 
 Simulator::~Simulator() = default;
@@ -392,7 +390,7 @@ double Simulator::commitLanes(std::size_t i) {
   rate_[i] = new_rate_[i];
   velocity_[i] = new_velocity_[i];
   previous_mid_[i] = new_mid_[i];
-  moved_in_step_[i] = steps_;
+  moved_in_step_[i] = sweep_;
   return rate_[i].squaredNorm();
 }
 
@@ -485,15 +483,18 @@ void Simulator::reset() {
   max_penetration_ = 0.0;
   penetrations_ = 0;
   collisions_ = 0;
-  // The step numbers count again from 0: no point or strip may seem placed already in them.
+  // The roots, which no substep writes, the same in the lanes' buffers (stepLanes swaps them with the state).
   syncLaneBuffers();
 }
 
 void Simulator::buildSprings() {
   springs_.clear();
-  // The last substep's forces go with the pairs (without springs step() computes none to replace them).
+  // The last substep's forces and measures go with the pairs (without springs step() computes none to
+  // replace them): no force, and the ratios and gap of a Simulator without springs.
   std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
   spring_touched_.clear();
+  min_ratio_[0] = min_ratio_[1] = max_ratio_[0] = max_ratio_[1] = 1.0;
+  min_gap_ = 0.0;
   std::vector<Vec3> styled;  // pairs and rest lengths come from the styled shape
   for (const Strip& s : hairstyle_.strips) styled.insert(styled.end(), s.points.begin(), s.points.end());
   if (params_.springs_within_strips) {
@@ -634,7 +635,7 @@ void Simulator::buildSprings() {
   spring_a_.resize(count);
   spring_b_.resize(count);
   spring_outside_.resize(count);
-  spring_touched_.clear();
+  spring_touched_.reserve(2 * count);  // (push_back never reallocates in computeSpringForces)
   spring_within_ = 0;
   for (std::size_t k = 0; k < count; ++k) {
     const SpringPair& p = springs_[k];
@@ -1384,6 +1385,9 @@ void Simulator::step(const StepInputs& in) {
   }
 
   StepTally tally;
+  // A new mark for the points and strips placed in this sweep (never reused, even after a step() that threw
+  // or a reset()).
+  ++sweep_;
   if (step_path_ == StepPath::Exact || lane_point_.empty()) {
     int offset = 0;
     for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
@@ -1438,7 +1442,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       const double rest = partner_rest_[static_cast<std::size_t>(q)];
       if (rest <= 0.0) continue;  // between strips
       const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
-      if (moved_in_step_[j] != steps_) continue;  // kept when j is placed
+      if (moved_in_step_[j] != sweep_) continue;  // kept when j is placed
       if (bandSide((positions_[i] - positions_[j]).norm(), rest, rest) != 0) {
         outside_band = true;
         return;
@@ -1461,7 +1465,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
     rate_[i] = w;
     direction_[i] = next;
     positions_[i] = pivot + d * next;
-    moved_in_step_[i] = steps_;
+    moved_in_step_[i] = sweep_;
     const Vec3 mid_next = pivot + 0.5 * d * next;
     velocity_[i] = (mid_next - previous_mid_[i]) / dt;
     previous_mid_[i] = mid_next;

@@ -1,6 +1,5 @@
 #include "StepLanes.hpp"
 
-#include <algorithm>
 #include <cmath>
 
 #include "RotationSeries.hpp"

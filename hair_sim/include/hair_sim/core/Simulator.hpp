@@ -121,10 +121,12 @@ class Simulator {
 
   void setStepPath(StepPath path) { step_path_ = path; }
   StepPath stepPath() const { return step_path_; }
-  /// Threads for the Lanes paths (1 = the calling thread only, the default): threads - 1 helper threads
-  /// compute blocks of chains while the calling thread commits the strips in order (the exact step and the
-  /// band stay on it), so the hair is bit-identical with any count. Hairstyles of fewer than 512 chains
-  /// (kMinBlocksForHelpers blocks) stay on the calling thread. Throws std::invalid_argument outside [1, 64].
+  /// Threads for step() (1 = the calling thread only, the default): threads - 1 helper threads scan parts of
+  /// the spring pairs (every path, from kMinPairsForHelpers pairs) and, on the Lanes paths, compute blocks
+  /// of chains while the calling thread commits the strips in order (the exact step and the band stay on
+  /// it), so the hair is bit-identical with any count. Hairstyles of fewer than 512 chains
+  /// (kMinBlocksForHelpers blocks) keep the blocks on the calling thread. Throws std::invalid_argument
+  /// outside [1, 64].
   void setThreads(int threads);
   int threads() const;
   /// Strips the last step() gave to the exact per-strip step (all of them on the Exact path).
@@ -134,7 +136,8 @@ class Simulator {
   const PhysicsParameters& parameters() const { return params_; }
   long stepCount() const { return steps_; }
   int controlPointCount() const { return static_cast<int>(positions_.size()); }
-  /// All control points, head frame, strip by strip, each row-major (the hairstyle's order).
+  /// All control points, head frame, strip by strip, each row-major (the hairstyle's order). The Lanes paths
+  /// swap the state with their buffers in step(): take the reference (or data()) again after a step.
   const std::vector<Vec3>& positionsHead() const { return positions_; }
   /// After a teleport of the head: the bodies' previous poses no longer count (no swept test across the
   /// jump); the hair, kept in the head frame, goes with the head rigidly.
@@ -212,11 +215,11 @@ class Simulator {
   /// in a strip committed from the lanes), and that place (new_position_ for a strip committed from the
   /// lanes, which stepLanes' buffer swap makes the state at the end).
   bool placedInStep(std::size_t j) const {
-    return moved_in_step_[j] == steps_ ||
-           strip_committed_[static_cast<std::size_t>(strip_of_point_[j])] == steps_;
+    return moved_in_step_[j] == sweep_ ||
+           strip_committed_[static_cast<std::size_t>(strip_of_point_[j])] == sweep_;
   }
   const Vec3& placedPosition(std::size_t j) const {
-    return strip_committed_[static_cast<std::size_t>(strip_of_point_[j])] == steps_ ? new_position_[j]
+    return strip_committed_[static_cast<std::size_t>(strip_of_point_[j])] == sweep_ ? new_position_[j]
                                                                                     : positions_[j];
   }
   /// The lanes' buffers (new_*_) equal to the state (reset: the roots, which no substep writes, must be the
@@ -281,6 +284,8 @@ class Simulator {
   Hairstyle hairstyle_;
   PhysicsParameters params_;
   long steps_ = 0;
+  /// Sweeps begun (each step(); never reset): the mark of moved_in_step_ and strip_committed_.
+  long sweep_ = 0;
   double max_rate_ = 0.0;
   std::vector<int> strip_offset_;
   // Per control point k (the segment that ends at k for rows >= 1), head frame.
@@ -304,7 +309,10 @@ class Simulator {
   std::size_t spring_within_ = 0;         ///< springs_[0, spring_within_) are the pairs within strips
   std::vector<int> spring_outside_;       ///< computeSpringForces: the pairs outside their band
   std::vector<int> spring_touched_;       ///< the points with a spring force (the others have none)
-  std::vector<long> moved_in_step_;       ///< step number in which a point got its final position
+                                     /// The sweep (sweep_) in which stepStrip gave a point its final position
+                                     /// (the points of a strip committed
+  /// from the lanes are marked by strip_committed_ instead).
+  std::vector<long> moved_in_step_;
   // resolveCollisions: the bodies within reach of the segment, the pivot and the previous end in the
   // sphere space of each body.
   std::vector<std::size_t> near_;
@@ -361,7 +369,7 @@ class Simulator {
   /// swaps them with the state (positions_, direction_, rate_, velocity_, previous_mid_) after copying in the
   /// strips that took the exact step.
   std::vector<Vec3> new_position_, new_direction_, new_rate_, new_velocity_, new_mid_;
-  /// Per strip, the substep (steps_) in which it was last committed from the lanes (-1: none since reset).
+  /// Per strip, the sweep (sweep_) in which it was last committed from the lanes (-1: none).
   std::vector<long> strip_committed_;
   /// Per strip, the first place of its sweep (column * rows + row) that takes the exact step, or kNoExact.
   std::vector<int> strip_exact_from_;
