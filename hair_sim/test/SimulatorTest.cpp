@@ -382,6 +382,74 @@ TEST(SimulatorTest, HelperThreadsGiveTheSameBits) {
   EXPECT_EQ(exact1, exact3);
 }
 
+TEST(SimulatorTest, PathSwitchesAndResetKeepTheBitsOnEveryThreadCount) {
+  // The Lanes paths swap the state with their buffers; the Exact path works in the state alone. Switching
+  // between them mid-run, and reset() in between, give the same hair on 1, 2 and 3 threads, and a run after
+  // reset() is a fresh run's. 600 generated strips: the helpers take part.
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  Iso3 rest = Iso3::Identity();
+  rest.translation() = Vec3(0.0, 0.0, 1.6);
+  GeneratorOptions generated;
+  generated.strips = 600;
+  const Hairstyle style = generateHairstyle(config, rest, generated);
+  auto drive = [&](Simulator& sim, HeadMotionEstimator& head, int from, int to) {
+    for (int i = from; i < to; ++i) {
+      Iso3 pose = rest;
+      pose.linear() = rotationFromRpy(Vec3(0.0, 0.3 * std::sin(i * 0.05), 0.9 * std::sin(i * 0.03)));
+      StepInputs in;
+      in.head = head.update(pose, sim.parameters().substep);
+      in.wind = Vec3(2.0, 1.0, 0.0);
+      for (const Body& b : config.bodies)
+        in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
+      sim.step(in);
+    }
+  };
+  auto run = [&](int threads, bool with_reset) {
+    Simulator sim(style, config.physics, config.bodies);
+    sim.setThreads(threads);
+    HeadMotionEstimator head;
+    head.reset(rest);
+    if (with_reset) {  // a history before the reset: the Exact path, then the Lanes path
+      sim.setStepPath(Simulator::StepPath::Exact);
+      drive(sim, head, 0, 10);
+      sim.setStepPath(Simulator::StepPath::Lanes);
+      drive(sim, head, 10, 30);
+      sim.reset();
+      head.reset(rest);
+    }
+    drive(sim, head, 0, 40);
+    sim.setStepPath(Simulator::StepPath::Exact);
+    drive(sim, head, 40, 45);
+    sim.setStepPath(Simulator::StepPath::LanesBaseline);
+    drive(sim, head, 45, 60);
+    sim.setStepPath(Simulator::StepPath::Lanes);
+    drive(sim, head, 60, 80);
+    return sim.positionsHead();
+  };
+  const std::vector<Vec3> reference = run(1, false);
+  for (int threads : {1, 2, 3})
+    for (bool with_reset : {false, true}) {
+      if (threads == 1 && !with_reset) continue;
+      const std::vector<Vec3> other = run(threads, with_reset);
+      ASSERT_EQ(other.size(), reference.size());
+      EXPECT_EQ(0, std::memcmp(other.data(), reference.data(), other.size() * sizeof(Vec3)))
+          << threads << " threads, reset " << with_reset;
+    }
+  // The hair after the switches: finite, every segment at its styled length.
+  std::size_t offset = 0;
+  for (const Strip& st : style.strips) {
+    for (int r = 1; r < st.rows; ++r)
+      for (int c = 0; c < st.columns; ++c) {
+        const Vec3& p = reference[offset + static_cast<std::size_t>(st.index(r, c))];
+        const Vec3& q = reference[offset + static_cast<std::size_t>(st.index(r - 1, c))];
+        const double styled = (st.point(r, c) - st.point(r - 1, c)).norm();
+        ASSERT_TRUE(p.allFinite());
+        EXPECT_NEAR((p - q).norm(), styled, 1e-9 * styled);
+      }
+    offset += static_cast<std::size_t>(st.pointCount());
+  }
+}
+
 TEST(SimulatorTest, SetThreadsTakesOneToSixtyFour) {
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
   Simulator sim(loadHairstyle(config.hairstyle_file), config.physics, config.bodies);
