@@ -1,0 +1,81 @@
+#!/bin/bash
+# Compares the step's wall time of another commit with the working tree's, in one sitting: builds
+# hair_sim_step_profile (Release) of OLD in a git worktree under AB_DIR and of the working tree in
+# build-release/, then runs the two alternately on one core (taskset: this VM's two vCPUs do not run alike)
+# and prints each pair's ns per update, both medians and the median of the pairs' ratios (new / old). Each
+# run also prints its state hash: the same hash means the same hair bit for bit.
+#
+# usage: scripts/ab_step.sh OLD_COMMIT [STRIPS=1000] [ROUNDS=8] [SUBSTEPS=480]
+#   AB_DIR (default /tmp/hair_sim_ab): the old commit's source and build; AB_CORE (default 0): the core.
+# On this shared VM one binary's runs differ by 20-30 % minutes apart: a change of a few per cent needs many
+# rounds, and a median ratio within 0.95-1.05 is no evidence either way (docs/benchmarks.md).
+set -euo pipefail
+export PATH=/usr/bin:$PATH
+if [ $# -lt 1 ]; then
+  sed -n '2,11p' "$0" >&2
+  exit 2
+fi
+ROOT="$(cd "$(dirname "$0")/.." && pwd)"
+OLD="$(git -C "$ROOT" rev-parse --verify -q "$1^{commit}")" || {
+  echo "ab_step: '$1' is not a commit of this repository" >&2
+  exit 2
+}
+STRIPS=${2:-1000}
+ROUNDS=${3:-8}
+SUBSTEPS=${4:-480}
+AB_DIR=${AB_DIR:-/tmp/hair_sim_ab}
+CORE=${AB_CORE:-0}
+
+configure() {  # source dir, build dir
+  cmake -S "$1" -B "$2" -DCMAKE_BUILD_TYPE=Release -DCATKIN_DEVEL_PREFIX="$2/devel" \
+    -DCATKIN_ENABLE_TESTING=OFF >"$2.cmake.log" 2>&1 || {
+    echo "ab_step: cmake failed for $1 (see $2.cmake.log)" >&2
+    exit 1
+  }
+}
+
+mkdir -p "$AB_DIR"
+if [ -d "$AB_DIR/src" ]; then
+  git -C "$AB_DIR/src" checkout -q --detach "$OLD"
+else
+  git -C "$ROOT" worktree add -q --detach "$AB_DIR/src" "$OLD"
+fi
+mkdir -p "$AB_DIR/build" "$ROOT/build-release"
+configure "$AB_DIR/src" "$AB_DIR/build"
+configure "$ROOT" "$ROOT/build-release"
+cmake --build "$AB_DIR/build" -j"$(nproc)" --target hair_sim_step_profile >"$AB_DIR/build.log" 2>&1 || {
+  echo "ab_step: build of $OLD failed (see $AB_DIR/build.log)" >&2
+  exit 1
+}
+cmake --build "$ROOT/build-release" -j"$(nproc)" --target hair_sim_step_profile >"$AB_DIR/build-new.log" 2>&1 || {
+  echo "ab_step: build of the working tree failed (see $AB_DIR/build-new.log)" >&2
+  exit 1
+}
+OLD_BIN="$AB_DIR/build/devel/lib/hair_sim/hair_sim_step_profile"
+NEW_BIN="$ROOT/build-release/devel/lib/hair_sim/hair_sim_step_profile"
+
+run() {  # binary -> "ns_per_update state_hash"
+  taskset -c "$CORE" "$1" --strips "$STRIPS" --warmup 240 --substeps "$SUBSTEPS" |
+    sed -n 's/.*"ns_per_update": \([0-9.]*\).*"state_hash": "\([0-9a-f]*\)".*/\1 \2/p'
+}
+
+echo "old $OLD, new: the working tree ($(git -C "$ROOT" rev-parse --short HEAD) + changes); $STRIPS strips," \
+  "$SUBSTEPS substeps after 240, $ROUNDS rounds on core $CORE"
+results="$AB_DIR/results.txt"
+: >"$results"
+for i in $(seq 1 "$ROUNDS"); do
+  read -r o oh <<<"$(run "$OLD_BIN")"
+  read -r n nh <<<"$(run "$NEW_BIN")"
+  echo "$o $n" >>"$results"
+  printf 'round %d: old %s ns (%s), new %s ns (%s), new / old %.3f\n' "$i" "$o" "$oh" "$n" "$nh" \
+    "$(echo "$n / $o" | bc -l)"
+done
+/usr/bin/python3 - "$results" <<'EOF'
+import statistics, sys
+rows = [tuple(map(float, line.split())) for line in open(sys.argv[1]) if line.strip()]
+old = [o for o, _ in rows]
+new = [n for _, n in rows]
+ratios = [n / o for o, n in rows]
+print(f"median ns per update: old {statistics.median(old):.1f}, new {statistics.median(new):.1f}; "
+      f"new / old per pair: median {statistics.median(ratios):.3f}, {min(ratios):.3f}-{max(ratios):.3f}")
+EOF
