@@ -35,9 +35,11 @@ configure() {  # source dir, build dir
 }
 
 mkdir -p "$AB_DIR"
-if [ -d "$AB_DIR/src" ]; then
+if [ "$(git -C "$AB_DIR/src" rev-parse --show-toplevel 2>/dev/null)" = "$AB_DIR/src" ]; then
   git -C "$AB_DIR/src" checkout -q --detach "$OLD"
-else
+else  # none yet, or a directory left without its worktree
+  rm -rf "$AB_DIR/src"
+  git -C "$ROOT" worktree prune
   git -C "$ROOT" worktree add -q --detach "$AB_DIR/src" "$OLD"
 fi
 mkdir -p "$AB_DIR/build" "$ROOT/build-release"
