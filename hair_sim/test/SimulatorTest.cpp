@@ -290,6 +290,21 @@ TEST(SimulatorTest, IdenticalInputsGiveBitIdenticalResults) {
 /// step paths of Simulator::StepPath on the same inputs. Returns the control points after `steps` substeps
 /// and the strips that went to the exact step over the run.
 /// The default hairstyle, or (generated_strips > 0) one generated with that many strips.
+/// Substep i of the shake the path tests drive (about y and z, amplitude a) with wind, from the head pose
+/// `rest`; the body frames of the config's bodies.
+StepInputs shakeInputs(const SimConfig& config, const Iso3& rest, int i, double a, HeadMotionEstimator& head,
+                       double substep) {
+  Iso3 pose = rest;
+  pose.linear() =
+      rotationFromRpy(Vec3(0.0, 0.3 * a * std::sin(i * 0.05 * a), 0.9 * a * std::sin(i * 0.03 * a)));
+  StepInputs in;
+  in.head = head.update(pose, substep);
+  in.wind = Vec3(2.0, 1.0, 0.0);
+  for (const Body& b : config.bodies)
+    in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
+  return in;
+}
+
 /// measures: the spring measures after the last substep (minSpringRatio and maxSpringRatio within and
 /// between strips, minStripGap).
 std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude, long* exact_strips = nullptr,
@@ -312,16 +327,7 @@ std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude,
   long exact = 0;
   double penetration = 0.0;
   for (int i = 1; i <= steps; ++i) {
-    Iso3 pose = rest;
-    const double a = amplitude;
-    pose.linear() =
-        rotationFromRpy(Vec3(0.0, 0.3 * a * std::sin(i * 0.05 * a), 0.9 * a * std::sin(i * 0.03 * a)));
-    StepInputs in;
-    in.head = head.update(pose, sim.parameters().substep);
-    in.wind = Vec3(2.0, 1.0, 0.0);
-    for (const Body& b : config.bodies)
-      in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
-    sim.step(in);
+    sim.step(shakeInputs(config, rest, i, amplitude, head, sim.parameters().substep));
     exact += sim.exactStripCount();
     penetration = std::max(penetration, sim.maxPenetration());
   }
@@ -393,16 +399,8 @@ TEST(SimulatorTest, PathSwitchesAndResetKeepTheBitsOnEveryThreadCount) {
   generated.strips = 600;
   const Hairstyle style = generateHairstyle(config, rest, generated);
   auto drive = [&](Simulator& sim, HeadMotionEstimator& head, int from, int to) {
-    for (int i = from; i < to; ++i) {
-      Iso3 pose = rest;
-      pose.linear() = rotationFromRpy(Vec3(0.0, 0.3 * std::sin(i * 0.05), 0.9 * std::sin(i * 0.03)));
-      StepInputs in;
-      in.head = head.update(pose, sim.parameters().substep);
-      in.wind = Vec3(2.0, 1.0, 0.0);
-      for (const Body& b : config.bodies)
-        in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
-      sim.step(in);
-    }
+    for (int i = from; i < to; ++i)
+      sim.step(shakeInputs(config, rest, i, 1.0, head, sim.parameters().substep));
   };
   auto run = [&](int threads, bool with_reset) {
     Simulator sim(style, config.physics, config.bodies);
