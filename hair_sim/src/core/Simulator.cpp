@@ -213,7 +213,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       lb.min_radius = now.radii().minCoeff();
       const BodyBound& bound = body_bounds_[m][b];
       lb.bound_radius = bound.radius;
-      lb.motion = bound.motion;
       lb.shift = bound.shift;
       lb.grow = 1.0 + bound.motion;
       lb.keep2 = (1.0 - bound.motion) * (1.0 - bound.motion);

@@ -59,9 +59,9 @@ struct LaneBody {
   double centre_before[3];
   double sinv_before[9];
   double bound_radius;  ///< ball about the centre that holds the body (see Simulator::BodyBound)
-  double motion;
   double shift;
-  // Of the motion, for the quick reject: 1 + motion, (1 - motion)^2, and whether motion < 0.5 (-1 or 0).
+  // Of the body's motion (Simulator::BodyBound), for the quick reject: 1 + motion, (1 - motion)^2, and
+  // whether motion < 0.5 (-1 or 0).
   double grow;
   double keep2;
   long slow;
@@ -309,9 +309,8 @@ class Simulator {
   std::size_t spring_within_ = 0;         ///< springs_[0, spring_within_) are the pairs within strips
   std::vector<int> spring_outside_;       ///< computeSpringForces: the pairs outside their band
   std::vector<int> spring_touched_;       ///< the points with a spring force (the others have none)
-                                     /// The sweep (sweep_) in which stepStrip gave a point its final position
-                                     /// (the points of a strip committed
-  /// from the lanes are marked by strip_committed_ instead).
+  // The sweep (sweep_) in which stepStrip gave a point its final position (the points of a strip committed
+  // from the lanes are marked by strip_committed_ instead).
   std::vector<long> moved_in_step_;
   // resolveCollisions: the bodies within reach of the segment, the pivot and the previous end in the
   // sphere space of each body.
