@@ -1,6 +1,7 @@
 #include "hair_sim/ros/HairSimNode.hpp"
 
 #include <geometry_msgs/TransformStamped.h>
+#include <ros/connection_manager.h>
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/util/YamlReader.hpp"
 #include "hair_sim/ros/InputChecks.hpp"
+#include "hair_sim/ros/TcpNoDelay.hpp"
 
 namespace hair_sim {
 
@@ -25,6 +27,7 @@ std::invalid_argument badParam(const std::string& name, const std::string& value
 const char* typeName(const std::string*) { return "a string"; }
 const char* typeName(const int*) { return "an integer"; }
 const char* typeName(const double*) { return "a number"; }
+const char* typeName(const bool*) { return "true or false"; }
 
 /// Private parameter `name` into `value` if it is set (returns whether it was); set with the wrong type
 /// (e.g. _publish_rate:=fast), it stops the start with the parameter and the value named, rather than
@@ -61,9 +64,12 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(n
                                                            : "both";
   live.mesh = mesh_options_;
   live_ = std::make_unique<LiveParameters>(pnh_, live);
-  markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("hair_markers", 2);
-  bodies_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("collision_bodies", 1, true);
-  state_pub_ = nh_.advertise<hair_sim_msgs::HairState>("hair_state", 2);
+  // A subscriber that connects gets TCP_NODELAY on its connection (~tcp_nodelay), whether it asked or not.
+  const ros::SubscriberStatusCallback connected = boost::bind(&HairSimNode::onSubscriberConnect, this);
+  markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("hair_markers", 2, connected);
+  bodies_pub_ = nh_.advertise<visualization_msgs::MarkerArray>(
+      "collision_bodies", 1, connected, ros::SubscriberStatusCallback(), ros::VoidConstPtr(), true);
+  state_pub_ = nh_.advertise<hair_sim_msgs::HairState>("hair_state", 2, connected);
   wind_sub_ = nh_.subscribe("wind", 10, &HairSimNode::onWind, this);
   events_pub_ = nh_.advertise<hair_sim_msgs::HairEvent>("events", 10);
   events_sub_ = nh_.subscribe("events", 50, &HairSimNode::onEvent, this);
@@ -162,6 +168,7 @@ void HairSimNode::readParameters() {
   readParam(pnh_, "strands_per_strip", strands_per_strip_);
   if (strands_per_strip_ < 1)
     throw badParam("strands_per_strip", std::to_string(strands_per_strip_), "must be >= 1");
+  readParam(pnh_, "tcp_nodelay", tcp_nodelay_);
   readParam(pnh_, "wind_scale", wind_scale_);
   if (!(std::isfinite(wind_scale_) && wind_scale_ >= 0.0 && wind_scale_ <= 100.0))
     throw badParam("wind_scale", formatDouble(wind_scale_), "must be in [0, 100]");
@@ -477,6 +484,23 @@ void HairSimNode::stepTo(const ros::Time& t, const HeadState& head, const std::v
   in.gravity = &events.gravity;
   in.body_frames = body_frames;
   simulator_->step(in);
+}
+
+void HairSimNode::onSubscriberConnect() {
+  if (!tcp_nodelay_) return;
+  // (In a nodelet manager: every connection accepted on the manager's TCPROS port, as one process.)
+  const NoDelayResult r = setTcpNoDelayOnAccepted(ros::ConnectionManager::instance()->getTCPPort());
+  if (!r.listed)
+    warnThrottled(
+        "tcp_nodelay",
+        "hair_sim: ~tcp_nodelay: cannot list this process's sockets (/proc/self/fd): subscribers that "
+        "do not ask for TCP_NODELAY keep Nagle's algorithm");
+  else if (r.failed > 0)
+    warnThrottled("tcp_nodelay", "hair_sim: ~tcp_nodelay: TCP_NODELAY could not be set on " +
+                                     std::to_string(r.failed) + " of " + std::to_string(r.accepted) +
+                                     " subscriber connections");
+  else if (r.set > 0)
+    ROS_DEBUG("hair_sim: TCP_NODELAY set on %d of %d subscriber connections", r.set, r.accepted);
 }
 
 void HairSimNode::warnThrottled(const std::string& what, const std::string& text) {

@@ -52,6 +52,9 @@ class HairSimNode {
   /// A warning about `what` (tf, wind, event): said at once when it differs from the last one about it,
   /// else at most every 2 s (a stream of the same bad input does not flood the log).
   void warnThrottled(const std::string& what, const std::string& text);
+  /// A subscriber connected to an output: with ~tcp_nodelay, TCP_NODELAY on the connections accepted on the
+  /// node's TCPROS port (setTcpNoDelayOnAccepted), as roscpp does when a subscriber asks for it.
+  void onSubscriberConnect();
   /// A head transform that jumps beyond the teleport limits from the previous one: the previous one is
   /// put in the buffer again just before it, so that the jump falls within one substep (a teleport).
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
@@ -101,6 +104,7 @@ class HairSimNode {
   HairMeshOptions mesh_options_;
   int max_substeps_per_update_ = 60;
   int threads_ = 1;          ///< Simulator::setThreads
+  bool tcp_nodelay_ = true;  ///< TCP_NODELAY on the subscribers' connections (onSubscriberConnect)
   double max_tf_age_ = 0.5;  ///< s: a newer head pose than this is expected; older = stale
   bool head_stale_ = false;
   ros::Time newest_head_stamp_;  ///< stamp of the newest head pose at the last update (time going back)
