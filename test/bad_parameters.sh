@@ -48,6 +48,8 @@ expect_refused "render_mode unknown" "parameter ~render_mode: 'cubes' must be me
   _config_file:="$CONFIG" _render_mode:=cubes
 expect_refused "threads 0" "parameter ~threads: '0' must be in 1..64" \
   _config_file:="$CONFIG" _threads:=0
+expect_refused "tcp_nodelay of the wrong type" "parameter ~tcp_nodelay: 'maybe' must be true or false" \
+  _config_file:="$CONFIG" _tcp_nodelay:=maybe
 expect_refused "teleport_distance 0" "parameter ~teleport_distance: '0' must be > 0 m" \
   _config_file:="$CONFIG" _teleport_distance:=0.0
 expect_refused "max_tf_age negative" "parameter ~max_tf_age: '-1' must be > 0 s" \

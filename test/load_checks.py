@@ -17,10 +17,12 @@ from the node they were loading.)
 
 test_load asserts that both outputs keep publish_rate within RATE_TOLERANCE (10 %), that the input rates
 reached INPUT_FRACTION of 1 kHz (else the test did not load the node as asked), and that the node logged no
-ERROR. The latency is measured and reported, not asserted (issue 8's target: tf arrival -> output <= 5 ms
-at the 99th percentile). The figures go to the log and, as one JSON object, to ~out when it is set.
+ERROR. With ~max_p99_ms > 0 it also asserts both outputs' p99 latency at or below it (`./run.sh load`: 5 ms,
+issue 8's target); at 0 (CTest's 12 s run, which shares the machine with the other tests) the latency is
+measured and reported only. The figures go to the log and, as one JSON object, to ~out when it is set.
 
-Private parameters: seconds (measuring window, 12), publish_rate (30), node (/hair_sim), out ('').
+Private parameters: seconds (measuring window, 12), publish_rate (30), node (/hair_sim), out (''),
+max_p99_ms (0: not asserted).
 """
 import json
 import os
@@ -66,6 +68,7 @@ class LoadChecks(unittest.TestCase):
         cls.publish_rate = float(rospy.get_param('~publish_rate', 30.0))
         cls.node = rospy.get_param('~node', '/hair_sim')
         cls.out = rospy.get_param('~out', '')
+        cls.max_p99_ms = float(rospy.get_param('~max_p99_ms', 0.0))
         cls.recording = False
         rospy.Subscriber('/rosout', Log, cls.on_log, queue_size=1000)
 
@@ -137,6 +140,11 @@ class LoadChecks(unittest.TestCase):
                                  '%s at %.2f Hz under load, publish_rate %.0f Hz +- %.0f %%' %
                                  (name, rate, self.publish_rate, 100 * RATE_TOLERANCE))
         self.assertEqual(errors, [], 'the node logged errors: %s' % errors[:3])
+        if self.max_p99_ms > 0.0:
+            for name, series in (('hair_markers', m), ('hair_state', s)):
+                self.assertLessEqual(series['latency_ms_p99'], self.max_p99_ms,
+                                     'tf -> %s p99 %.2f ms under load (max %.2f ms), target %.1f ms' %
+                                     (name, series['latency_ms_p99'], series['latency_ms_max'], self.max_p99_ms))
 
 
 if __name__ == '__main__':
