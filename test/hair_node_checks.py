@@ -19,6 +19,10 @@ translate_distance m over translate_duration s, and stops. The checks, run in th
   test_d_markers_well_formed    Every hair_markers message received during the whole run: at least one
                                 TRIANGLE_LIST marker, frame_id == world frame, every point (and pose, scale,
                                 colour) finite, and len(colors) == len(points) > 0 for list markers.
+  test_f_subscribers_get_tcp_nodelay  ~tcp_nodelay (default true): every connection accepted on the node's
+                                TCPROS port (this test's own subscriptions, which do not ask for TCP_NODELAY,
+                                among them) has TCP_NODELAY set, read from the node's sockets themselves
+                                (pidfd_getfd: needs the right to trace the node, e.g. root; skipped without).
 
 Markers are large (about 1.5 MB at 30 Hz), far too slow for genpy in Python: they are read from the wire
 format with array/struct (checked against genpy on the first message).
@@ -28,14 +32,18 @@ the config's), driver (name of the head_driver node whose translate_* parameters
 /head_driver). Everything is waited for with polling loops and timeouts.
 """
 import array
+import ctypes
+import errno
 import math
 import os
+import socket
 import struct
 import sys
 import threading
 import time
 import unittest
 
+import rosgraph
 import rospy
 import rostest
 import tf2_ros
@@ -44,6 +52,11 @@ from hair_sim_msgs.msg import HairState
 from hair_sim_msgs.srv import Reset, ResetRequest
 from rosgraph_msgs.msg import Log
 from visualization_msgs.msg import Marker, MarkerArray
+
+try:
+    from xmlrpc.client import ServerProxy
+except ImportError:  # pragma: no cover
+    from xmlrpclib import ServerProxy
 
 PKG = 'hair_sim'
 NAME = 'hair_node_checks'
@@ -456,6 +469,53 @@ class HairNodeChecks(unittest.TestCase):
         with self.lock:
             errors = list(self.node_errors)
         self.assertEqual(errors[:3], [], '%d errors logged by %s, first ones above' % (len(errors), self.node_name))
+
+    # -- (f) ~tcp_nodelay: the node turns Nagle's algorithm off on its subscribers' connections
+    def test_f_subscribers_get_tcp_nodelay(self):
+        self.wait_for(lambda: self.marker_count >= 3, 10.0, '3 hair_markers messages')
+        uri = rosgraph.Master('/' + NAME).lookupNode(self.node_name)
+        node = ServerProxy(uri)
+        code, _, pid = node.getPid('/' + NAME)
+        self.assertEqual(code, 1, 'getPid of %s' % self.node_name)
+        # The node's TCPROS port: where it tells a subscriber of hair_markers to connect.
+        code, _, protocol = node.requestTopic('/' + NAME, '/hair_markers', [['TCPROS']])
+        self.assertEqual(code, 1, 'requestTopic(/hair_markers) of %s: %s' % (self.node_name, protocol))
+        port = int(protocol[2])
+        if not hasattr(os, 'pidfd_open'):
+            self.skipTest('os.pidfd_open needs Python 3.9 and Linux 5.3')
+        libc = ctypes.CDLL(None, use_errno=True)
+        pidfd = os.pidfd_open(int(pid))
+        accepted = {}  # peer -> TCP_NODELAY
+        try:
+            for name in os.listdir('/proc/%d/fd' % pid):
+                try:
+                    if not os.readlink('/proc/%d/fd/%s' % (pid, name)).startswith('socket:'):
+                        continue
+                except OSError:  # closed meanwhile
+                    continue
+                fd = libc.syscall(438, pidfd, int(name), 0)  # pidfd_getfd: a copy of the node's descriptor
+                if fd < 0:
+                    err = ctypes.get_errno()
+                    if err in (errno.EPERM, errno.EACCES, errno.ENOSYS):
+                        self.skipTest('cannot read the node\'s sockets (pidfd_getfd: %s)' % os.strerror(err))
+                    continue
+                s = socket.socket(fileno=fd)
+                try:
+                    if s.family in (socket.AF_INET, socket.AF_INET6) and s.type == socket.SOCK_STREAM and \
+                            s.getsockname()[1] == port:
+                        try:
+                            accepted[s.getpeername()] = s.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY)
+                        except OSError:  # the listening socket has no peer
+                            pass
+                finally:
+                    s.close()  # the copy only
+        finally:
+            os.close(pidfd)
+        rospy.loginfo('%s: connections accepted on port %d with TCP_NODELAY: %s', NAME, port, accepted)
+        # This test's own hair_markers and hair_state subscriptions at least.
+        self.assertGreaterEqual(len(accepted), 2, 'connections accepted on the TCPROS port %d: %s' % (port, accepted))
+        self.assertTrue(all(accepted.values()), 'connections without TCP_NODELAY: %s' %
+                        [peer for peer, on in accepted.items() if not on])
 
 
 if __name__ == '__main__':
