@@ -14,10 +14,13 @@
 ///
 /// Checked at every substep (OfflineRunner at 240 frames a second: each frame is a substep):
 ///   all control points finite; max_penetration_m <= 1e-9; the strip width band: the largest
-///   within-strip spring distance / rest length <= springs.far_factor (+1e-9) while no input at the
-///   validation's limits (nor a violent head key) acts (under those the bodies, which keep the last word,
-///   may hold a strip open: listed in band_episodes, not a failure; with --band report no breach fails
-///   the run); the kinetic energy of the hair
+///   within-strip spring distance / rest length <= springs.far_factor (+1e-9), or back within it in the
+///   next substep, while no input at the validation's limits (nor a violent head key) acts. The bodies
+///   keep the last word: a body can hold a strip open for a substep (two columns' tips escaping a body to
+///   either side of it, neither able to cross it to its partner), and the band brings it back in the next
+///   one; such single substeps are counted (band_single_substeps_without_extreme_input) and listed in
+///   band_episodes, and a breach that lasts two substeps in a row fails the run. Under inputs at the
+///   limits no breach fails (listed only); with --band report none does. Then the kinetic energy of the hair
 ///   relative to the head <= the bound below.
 /// Every --check-every seconds: every segment's length within 1e-6 of its rest length (relative), and
 /// the resident set size (/proc/self/statm), which must not grow by more than 4 MiB after the first check
@@ -321,6 +324,8 @@ int main(int argc, char** argv) {
     double max_ke = 0.0, max_ke_t = 0.0, max_pen = 0.0, max_len_err = 0.0, max_width = 0.0, max_width_t = 0.0;
     double ke_last_second = 0.0;
     long substeps = 0, band_breaches = 0, band_breaches_ordinary = 0;
+    // Ordinary-input breaches: this run of them (substeps in a row), the longest run, single substeps.
+    long band_run = 0, band_longest_run = 0, band_single = 0;
     bool all_finite = true;
     long rss_start = 0, rss_end = 0, rss_max = 0;
     double next_check = check_every;
@@ -355,13 +360,18 @@ int main(int argc, char** argv) {
       if (f.t > 0.0) {
         max_pen = std::max(max_pen, sim.maxPenetration());
         const double w = sim.maxSpringRatio(true);
+        const bool ordinary_breach = w > far + 1e-9 && !extremeAt(f.t);
+        if (!ordinary_breach && band_run == 1) ++band_single;  // restored in the next substep
+        band_run = ordinary_breach ? band_run + 1 : 0;
+        band_longest_run = std::max(band_longest_run, band_run);
         if (w > far + 1e-9) {
           // Under inputs at the validation's limits the bodies, which keep the last word, may hold a strip
-          // open: reported (band_episodes), not a failure.
-          if (!extremeAt(f.t)) {
-            if (band_breaches_ordinary == 0 && band_is_failure)
-              fail("width ratio " + formatDouble(w) + " > far_factor at t = " + formatDouble(f.t) +
-                   " with no input at the limits acting");
+          // open: reported (band_episodes), not a failure. Under ordinary input for one substep too (see
+          // the top of this file); not two in a row.
+          if (ordinary_breach) {
+            if (band_run == 2 && band_is_failure)
+              fail("width ratio " + formatDouble(w) + " > far_factor for two substeps in a row at t = " +
+                   formatDouble(f.t) + " with no input at the limits acting: the band was not restored");
             ++band_breaches_ordinary;
           }
           ++band_breaches;
@@ -477,7 +487,10 @@ int main(int argc, char** argv) {
       << ", \"max_segment_length_error\": " << formatDouble(max_len_err)
       << ", \"far_factor\": " << formatDouble(far) << ", \"max_width_ratio\": " << formatDouble(max_width)
       << ", \"max_width_ratio_t\": " << formatDouble(max_width_t)
-      << ", \"substeps_outside_band\": " << band_breaches;
+      << ", \"substeps_outside_band\": " << band_breaches
+      << ", \"band_substeps_without_extreme_input\": " << band_breaches_ordinary
+      << ", \"band_single_substeps_without_extreme_input\": " << band_single
+      << ", \"band_longest_run_without_extreme_input\": " << band_longest_run;
     // The worst ten episodes of each kind, with what was acting then.
     auto listEpisodes = [&](const char* name, const char* value, std::vector<Episode> list) {
       long ordinary = 0;
