@@ -19,9 +19,9 @@ translate_distance m over translate_duration s, and stops. The checks, run in th
   test_d_markers_well_formed    Every hair_markers message received during the whole run: at least one
                                 TRIANGLE_LIST marker, frame_id == world frame, every point (and pose, scale,
                                 colour) finite, and len(colors) == len(points) > 0 for list markers.
-  test_f_subscribers_get_tcp_nodelay  ~tcp_nodelay (default true): every connection accepted on the node's
-                                TCPROS port (this test's own subscriptions, which do not ask for TCP_NODELAY,
-                                among them) has TCP_NODELAY set, read from the node's sockets themselves
+  test_f_subscribers_get_tcp_nodelay  ~tcp_nodelay (default true): a new subscription to collision_bodies
+                                (rospy does not ask for TCP_NODELAY) gets TCP_NODELAY on the node's side
+                                of its connection, read from the node's sockets themselves
                                 (pidfd_getfd: needs the right to trace the node, e.g. root; skipped without).
 
 Markers are large (about 1.5 MB at 30 Hz), far too slow for genpy in Python: they are read from the wire
@@ -471,8 +471,26 @@ class HairNodeChecks(unittest.TestCase):
         self.assertEqual(errors[:3], [], '%d errors logged by %s, first ones above' % (len(errors), self.node_name))
 
     # -- (f) ~tcp_nodelay: the node turns Nagle's algorithm off on its subscribers' connections
+    @staticmethod
+    def connections_to(port):
+        """Local (host, port) of this process's TCP connections to `port`."""
+        mine = set()
+        for name in os.listdir('/proc/self/fd'):
+            try:
+                s = socket.socket(fileno=os.dup(int(name)))
+            except OSError:  # not a socket (or closed meanwhile)
+                continue
+            try:
+                if s.family in (socket.AF_INET, socket.AF_INET6) and s.type == socket.SOCK_STREAM and \
+                        s.getpeername()[1] == port:
+                    mine.add(s.getsockname())
+            except OSError:  # not connected
+                pass
+            finally:
+                s.close()
+        return mine
+
     def test_f_subscribers_get_tcp_nodelay(self):
-        self.wait_for(lambda: self.marker_count >= 3, 10.0, '3 hair_markers messages')
         uri = rosgraph.Master('/' + NAME).lookupNode(self.node_name)
         node = ServerProxy(uri)
         code, _, pid = node.getPid('/' + NAME)
@@ -483,9 +501,49 @@ class HairNodeChecks(unittest.TestCase):
         port = int(protocol[2])
         if not hasattr(os, 'pidfd_open'):
             self.skipTest('os.pidfd_open needs Python 3.9 and Linux 5.3')
+        # A new subscription (rospy does not ask for TCP_NODELAY) to an output this process has not
+        # subscribed to (rospy shares one connection among a process's subscribers of a topic): its
+        # connection is the one this process has now and did not have before. (This process's /rosout
+        # subscription also connects to the node's port, to roscpp's own /rosout publisher, which has no
+        # connect callback: the node sets it only if a subscriber of its own outputs connects later.)
+        before = self.connections_to(port)
+        got = {'collision_bodies': 0}
+
+        def counter(topic):
+            def count(_):
+                got[topic] += 1
+            return count
+        subs = [rospy.Subscriber(topic, rospy.AnyMsg, counter(topic), queue_size=1) for topic in got]
+        try:
+            self.wait_for(lambda: min(got.values()) >= 1, 10.0, 'collision_bodies (latched) on a new subscription')
+            new = self.connections_to(port) - before
+            self.assertEqual(len(new), 1, 'new connections to the node\'s port %d: %s' % (port, sorted(new)))
+            # The node sets the option when its connect callback runs, right after the link is made: wait a
+            # little for it.
+            deadline = time.time() + 2.0
+            while True:
+                accepted = self.node_tcp_nodelay(int(pid), port)
+                missing = [peer for peer in new if peer not in accepted]
+                self.assertEqual(missing, [], 'the node has no socket accepted from %s (it has %s)' %
+                                 (missing, sorted(accepted)))
+                off = [peer for peer in new if not accepted[peer]]
+                if not off or time.time() > deadline:
+                    break
+                time.sleep(0.1)
+            rospy.loginfo('%s: connections accepted on port %d (TCP_NODELAY): %s; the new subscriptions: %s', NAME,
+                          port, accepted, sorted(new))
+            self.assertEqual(off, [], 'new subscriptions\' connections without TCP_NODELAY on the node\'s side: %s' %
+                             off)
+        finally:
+            for sub in subs:
+                sub.unregister()
+
+    def node_tcp_nodelay(self, pid, port):
+        """{peer: TCP_NODELAY} of the node's connections accepted on `port`, from copies of its descriptors
+        (pidfd_getfd); skips the test without the right to take them."""
         libc = ctypes.CDLL(None, use_errno=True)
-        pidfd = os.pidfd_open(int(pid))
-        accepted = {}  # peer -> TCP_NODELAY
+        pidfd = os.pidfd_open(pid)
+        accepted = {}
         try:
             for name in os.listdir('/proc/%d/fd' % pid):
                 try:
@@ -511,12 +569,7 @@ class HairNodeChecks(unittest.TestCase):
                     s.close()  # the copy only
         finally:
             os.close(pidfd)
-        rospy.loginfo('%s: connections accepted on port %d with TCP_NODELAY: %s', NAME, port, accepted)
-        # This test's own hair_markers and hair_state subscriptions at least.
-        self.assertGreaterEqual(len(accepted), 2, 'connections accepted on the TCPROS port %d: %s' % (port, accepted))
-        self.assertTrue(all(accepted.values()), 'connections without TCP_NODELAY: %s' %
-                        [peer for peer, on in accepted.items() if not on])
-
+        return accepted
 
 if __name__ == '__main__':
     rostest.rosrun(PKG, NAME, HairNodeChecks, sys.argv)
