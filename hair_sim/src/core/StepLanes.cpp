@@ -109,6 +109,32 @@ HAIR_SIM_ALWAYS_INLINE auto pathEnters(V q0x, V q0y, V q0z, V q1x, V q1y, V q1z)
   return (c > 0.0) & a_ok & (b < 0.0) & (disc >= 0.0) & ((lhs <= 0.0) | (lhs * lhs <= disc));
 }
 
+/// Lane l of the vector: base[idx[l] * stride + c], built from scalars in registers (not lane by lane
+/// through memory). A function, not a lambda of blockBody: a lambda does not take its enclosing function's
+/// target("avx2"), so where the compiler leaves it out of line (at -O0, or -O2 with sanitizers) it would
+/// return a 32-byte vector by the baseline's ABI to an AVX2 caller that reads it from a register: garbage
+/// (fuzz_yaml under clang's ASan saw NaN hair). Always inlined, it takes the caller's instruction set.
+template <int N, class V>
+HAIR_SIM_ALWAYS_INLINE V gatherLanes(const double* base, int stride, int c, const int* idx) {
+  if constexpr (N == 4)
+    return V{base[idx[0] * stride + c], base[idx[1] * stride + c], base[idx[2] * stride + c],
+             base[idx[3] * stride + c]};
+  else
+    return V{base[idx[0] * stride + c], base[idx[1] * stride + c]};
+}
+/// Coordinate c of the Vec3 at idx[l] of a, lane by lane.
+template <int N, class V>
+HAIR_SIM_ALWAYS_INLINE V gatherVec3(const Vec3* a, int c, const int* idx) {
+  return gatherLanes<N, V>(reinterpret_cast<const double*>(a), 3, c, idx);
+}
+/// N consecutive doubles (a block's constant in lane order).
+template <class V>
+HAIR_SIM_ALWAYS_INLINE V loadLanes(const double* at) {
+  V v;
+  __builtin_memcpy(&v, at, sizeof(V));
+  return v;
+}
+
 /// Lanes l0 .. l0 + N - 1 of the block; have_before = job.have_before.
 template <int N, bool have_before>
 HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
@@ -148,25 +174,14 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     }
     if (active_count == 0) break;
     const bool all_active = active_count == N;
-    // The vectors are built from scalars in registers (not lane by lane through memory).
-    auto gather = [&](const double* base, int stride, int c) {
-      if constexpr (N == 4)
-        return V{base[idx[0] * stride + c], base[idx[1] * stride + c], base[idx[2] * stride + c],
-                 base[idx[3] * stride + c]};
-      else
-        return V{base[idx[0] * stride + c], base[idx[1] * stride + c]};
-    };
-    auto vec3 = [&](const Vec3* a, int c) { return gather(reinterpret_cast<const double*>(a), 3, c); };
+    auto vec3 = [&](const Vec3* a, int c)
+                    HAIR_SIM_LAMBDA_ALWAYS_INLINE { return gatherVec3<N, V>(a, c, idx); };
     nx = vec3(job.direction, 0), ny = vec3(job.direction, 1), nz = vec3(job.direction, 2);
     vx = vec3(job.velocity, 0), vy = vec3(job.velocity, 1), vz = vec3(job.velocity, 2);
     wx = vec3(job.rate, 0), wy = vec3(job.rate, 1), wz = vec3(job.rate, 2);
     fx = vec3(job.spring_force, 0), fy = vec3(job.spring_force, 1), fz = vec3(job.spring_force, 2);
     const double* k_row = job.constants + static_cast<std::ptrdiff_t>(r) * kConstants * W + l0;
-    auto constant = [&](int c) {
-      V v;
-      __builtin_memcpy(&v, k_row + c * W, sizeof(V));
-      return v;
-    };
+    auto constant = [&](int c) HAIR_SIM_LAMBDA_ALWAYS_INLINE { return loadLanes<V>(k_row + c * W); };
     ux = constant(0), uy = constant(1), uz = constant(2);
     sx = constant(3), sy = constant(4), sz = constant(5);
     mx = vec3(job.previous_mid, 0), my = vec3(job.previous_mid, 1), mz = vec3(job.previous_mid, 2);
