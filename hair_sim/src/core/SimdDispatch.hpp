@@ -11,13 +11,8 @@
 
 #if defined(__GNUC__) || defined(__clang__)
 #define HAIR_SIM_ALWAYS_INLINE inline __attribute__((always_inline))
-/// After a lambda's parameter list. A lambda in a kernel compiled for AVX2 does not take its function's
-/// target attribute: one that passes or returns 32-byte vectors must be inlined, or the two sides disagree
-/// on how the vector travels (the baseline's ABI against AVX's).
-#define HAIR_SIM_LAMBDA_ALWAYS_INLINE __attribute__((always_inline))
 #else
 #define HAIR_SIM_ALWAYS_INLINE inline
-#define HAIR_SIM_LAMBDA_ALWAYS_INLINE
 #endif
 
 namespace hair_sim {

@@ -111,9 +111,11 @@ HAIR_SIM_ALWAYS_INLINE auto pathEnters(V q0x, V q0y, V q0z, V q1x, V q1y, V q1z)
 
 /// Lane l of the vector: base[idx[l] * stride + c], built from scalars in registers (not lane by lane
 /// through memory). A function, not a lambda of blockBody: a lambda does not take its enclosing function's
-/// target("avx2"), so where the compiler leaves it out of line (at -O0, or -O2 with sanitizers) it would
-/// return a 32-byte vector by the baseline's ABI to an AVX2 caller that reads it from a register: garbage
-/// (fuzz_yaml under clang's ASan saw NaN hair). Always inlined, it takes the caller's instruction set.
+/// target("avx2"), so where the compiler left it out of line (clang with ASan and UBSan) it returned its
+/// 32-byte vector by the baseline's ABI to an AVX2 caller that read it from a register: garbage, NaN hair
+/// (fuzz_yaml). Always inlined, a function takes the caller's instruction set: every function here that
+/// passes or returns a vector is HAIR_SIM_ALWAYS_INLINE, and no lambda does. (-Wpsabi cannot police this:
+/// it warns about every such function, inlined or not, so it is off for this file.)
 template <int N, class V>
 HAIR_SIM_ALWAYS_INLINE V gatherLanes(const double* base, int stride, int c, const int* idx) {
   if constexpr (N == 4)
@@ -174,20 +176,23 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     }
     if (active_count == 0) break;
     const bool all_active = active_count == N;
-    auto vec3 = [&](const Vec3* a, int c)
-                    HAIR_SIM_LAMBDA_ALWAYS_INLINE { return gatherVec3<N, V>(a, c, idx); };
-    nx = vec3(job.direction, 0), ny = vec3(job.direction, 1), nz = vec3(job.direction, 2);
-    vx = vec3(job.velocity, 0), vy = vec3(job.velocity, 1), vz = vec3(job.velocity, 2);
-    wx = vec3(job.rate, 0), wy = vec3(job.rate, 1), wz = vec3(job.rate, 2);
-    fx = vec3(job.spring_force, 0), fy = vec3(job.spring_force, 1), fz = vec3(job.spring_force, 2);
+    nx = gatherVec3<N, V>(job.direction, 0, idx), ny = gatherVec3<N, V>(job.direction, 1, idx),
+    nz = gatherVec3<N, V>(job.direction, 2, idx);
+    vx = gatherVec3<N, V>(job.velocity, 0, idx), vy = gatherVec3<N, V>(job.velocity, 1, idx),
+    vz = gatherVec3<N, V>(job.velocity, 2, idx);
+    wx = gatherVec3<N, V>(job.rate, 0, idx), wy = gatherVec3<N, V>(job.rate, 1, idx),
+    wz = gatherVec3<N, V>(job.rate, 2, idx);
+    fx = gatherVec3<N, V>(job.spring_force, 0, idx), fy = gatherVec3<N, V>(job.spring_force, 1, idx),
+    fz = gatherVec3<N, V>(job.spring_force, 2, idx);
     const double* k_row = job.constants + static_cast<std::ptrdiff_t>(r) * kConstants * W + l0;
-    auto constant = [&](int c) HAIR_SIM_LAMBDA_ALWAYS_INLINE { return loadLanes<V>(k_row + c * W); };
-    ux = constant(0), uy = constant(1), uz = constant(2);
-    sx = constant(3), sy = constant(4), sz = constant(5);
-    mx = vec3(job.previous_mid, 0), my = vec3(job.previous_mid, 1), mz = vec3(job.previous_mid, 2);
-    ex = vec3(job.positions, 0), ey = vec3(job.positions, 1), ez = vec3(job.positions, 2);
-    d = constant(6);
-    ii = constant(7);
+    ux = loadLanes<V>(k_row + 0 * W), uy = loadLanes<V>(k_row + 1 * W), uz = loadLanes<V>(k_row + 2 * W);
+    sx = loadLanes<V>(k_row + 3 * W), sy = loadLanes<V>(k_row + 4 * W), sz = loadLanes<V>(k_row + 5 * W);
+    mx = gatherVec3<N, V>(job.previous_mid, 0, idx), my = gatherVec3<N, V>(job.previous_mid, 1, idx),
+    mz = gatherVec3<N, V>(job.previous_mid, 2, idx);
+    ex = gatherVec3<N, V>(job.positions, 0, idx), ey = gatherVec3<N, V>(job.positions, 1, idx),
+    ez = gatherVec3<N, V>(job.positions, 2, idx);
+    d = loadLanes<V>(k_row + 6 * W);
+    ii = loadLanes<V>(k_row + 7 * W);
     if (!all_active) {  // an idle lane: a still vertical segment, never written back
       const V zero = splat<V>(0.0), one = splat<V>(1.0);
       nx = sel(active, nx, zero), ny = sel(active, ny, zero), nz = sel(active, nz, one);
