@@ -59,18 +59,23 @@ int listenOn(int family, int* port) {
   return fd;
 }
 
-/// A client connected to the listener `server` (same family); the accepted side in *accepted.
-int connectTo(int server, int family, int* accepted) {
+/// Both ends of a loopback connection.
+struct Link {
+  Fd client;    ///< the side that connected
+  Fd accepted;  ///< the listener's side
+};
+
+/// A client connected to the listener `server` (same family), and the side `server` accepted.
+Link connectTo(int server, int family) {
   sockaddr_storage address{};
   socklen_t length = sizeof address;
   getsockname(server, reinterpret_cast<sockaddr*>(&address), &length);
   const int fd = socket(family, SOCK_STREAM, 0);
   if (fd < 0 || connect(fd, reinterpret_cast<sockaddr*>(&address), length) != 0) {
     ADD_FAILURE() << "connect failed";
-    return fd;
+    return Link{Fd(fd), Fd()};
   }
-  *accepted = accept(server, nullptr, nullptr);
-  return fd;
+  return Link{Fd(fd), Fd(accept(server, nullptr, nullptr))};
 }
 
 TEST(TcpNoDelayTest, OnlyTheConnectionsAcceptedOnThePort) {
@@ -78,13 +83,10 @@ TEST(TcpNoDelayTest, OnlyTheConnectionsAcceptedOnThePort) {
   Fd server(listenOn(AF_INET, &port)), other(listenOn(AF_INET, &other_port));
   ASSERT_GE(server.fd, 0);
   ASSERT_GE(other.fd, 0);
-  int a1 = -1, a2 = -1, a3 = -1;
-  Fd c1(connectTo(server.fd, AF_INET, &a1));
-  Fd s1(a1);
-  Fd c2(connectTo(server.fd, AF_INET, &a2));
-  Fd s2(a2);
-  Fd c3(connectTo(other.fd, AF_INET, &a3));
-  Fd s3(a3);
+  const Link l1 = connectTo(server.fd, AF_INET), l2 = connectTo(server.fd, AF_INET);
+  const Link l3 = connectTo(other.fd, AF_INET);
+  const Fd &c1 = l1.client, &s1 = l1.accepted, &c2 = l2.client, &s2 = l2.accepted;
+  const Fd &c3 = l3.client, &s3 = l3.accepted;
   ASSERT_GE(s1.fd, 0);
   ASSERT_GE(s2.fd, 0);
   ASSERT_GE(s3.fd, 0);
@@ -104,9 +106,8 @@ TEST(TcpNoDelayTest, OnlyTheConnectionsAcceptedOnThePort) {
   const NoDelayResult again = setTcpNoDelayOnAccepted(port);
   EXPECT_EQ(again.accepted, 2);
   EXPECT_EQ(again.set, 0);
-  int a4 = -1;
-  Fd c4(connectTo(server.fd, AF_INET, &a4));
-  Fd s4(a4);
+  const Link l4 = connectTo(server.fd, AF_INET);
+  const Fd &c4 = l4.client, &s4 = l4.accepted;
   const NoDelayResult third = setTcpNoDelayOnAccepted(port);
   EXPECT_EQ(third.accepted, 3);
   EXPECT_EQ(third.set, 1);
@@ -118,9 +119,8 @@ TEST(TcpNoDelayTest, Ipv6ConnectionsToo) {
   int port = 0;
   Fd server(listenOn(AF_INET6, &port));
   if (server.fd < 0) GTEST_SKIP() << "no IPv6 loopback on this host";
-  int a = -1;
-  Fd c(connectTo(server.fd, AF_INET6, &a));
-  Fd s(a);
+  const Link link = connectTo(server.fd, AF_INET6);
+  const Fd &c = link.client, &s = link.accepted;
   ASSERT_GE(s.fd, 0);
   const NoDelayResult r = setTcpNoDelayOnAccepted(port);
   EXPECT_EQ(r.accepted, 1);
@@ -133,9 +133,8 @@ TEST(TcpNoDelayTest, APortOutOfRangeTouchesNothing) {
   int port = 0;
   Fd server(listenOn(AF_INET, &port));
   ASSERT_GE(server.fd, 0);
-  int a = -1;
-  Fd c(connectTo(server.fd, AF_INET, &a));
-  Fd s(a);
+  const Link link = connectTo(server.fd, AF_INET);
+  const Fd& s = link.accepted;
   for (int bad : {0, -1, 65536}) {
     const NoDelayResult r = setTcpNoDelayOnAccepted(bad);
     EXPECT_FALSE(r.listed) << bad;
