@@ -472,7 +472,18 @@ class HairNodeChecks(unittest.TestCase):
 
     # -- (f) ~tcp_nodelay: the node turns Nagle's algorithm off on its subscribers' connections
     @staticmethod
-    def connections_to(port):
+    def tcp_ends(s):
+        """(local, peer) addresses of a connected IPv4 / IPv6 TCP socket, else None (a listening socket has no
+        peer)."""
+        if s.family not in (socket.AF_INET, socket.AF_INET6) or s.type != socket.SOCK_STREAM:
+            return None
+        try:
+            return s.getsockname(), s.getpeername()
+        except OSError:
+            return None
+
+    @classmethod
+    def connections_to(cls, port):
         """Local (host, port) of this process's TCP connections to `port`."""
         mine = set()
         for name in os.listdir('/proc/self/fd'):
@@ -481,11 +492,9 @@ class HairNodeChecks(unittest.TestCase):
             except OSError:  # not a socket (or closed meanwhile)
                 continue
             try:
-                if s.family in (socket.AF_INET, socket.AF_INET6) and s.type == socket.SOCK_STREAM and \
-                        s.getpeername()[1] == port:
-                    mine.add(s.getsockname())
-            except OSError:  # not connected
-                pass
+                ends = cls.tcp_ends(s)
+                if ends and ends[1][1] == port:
+                    mine.add(ends[0])
             finally:
                 s.close()
         return mine
@@ -559,12 +568,9 @@ class HairNodeChecks(unittest.TestCase):
                     continue
                 s = socket.socket(fileno=fd)
                 try:
-                    if s.family in (socket.AF_INET, socket.AF_INET6) and s.type == socket.SOCK_STREAM and \
-                            s.getsockname()[1] == port:
-                        try:
-                            accepted[s.getpeername()] = s.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY)
-                        except OSError:  # the listening socket has no peer
-                            pass
+                    ends = self.tcp_ends(s)
+                    if ends and ends[0][1] == port:
+                        accepted[ends[1]] = s.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY)
                 finally:
                     s.close()  # the copy only
         finally:
