@@ -55,9 +55,9 @@ std::vector<SyntheticStrip> makeHairstyle() {
   return strips;
 }
 
-void runTessellation(benchmark::State& state, TessellationMethod method) {
+void runTessellation(benchmark::State& state, TessellationMethod method, LevelOfDetail level = {}) {
   const std::vector<SyntheticStrip> strips = makeHairstyle();
-  Tessellator tessellator(LevelOfDetail{}, method);
+  Tessellator tessellator(level, method);
   std::vector<StripMesh> meshes(strips.size());
   std::int64_t vertices = 0;
   for (std::size_t i = 0; i < strips.size(); ++i) {  // warm caches and mesh storage
@@ -83,8 +83,17 @@ void BM_Tessellate_CachedBasis(benchmark::State& state) {
   runTessellation(state, TessellationMethod::CachedBasis);
 }
 
+/// CachedBasis at samples_along = the argument (the default level of detail has 4): the cost per vertex of
+/// longer columns, where the work per strip and per column is shared by more vertices.
+void BM_Tessellate_CachedBasisAlong(benchmark::State& state) {
+  LevelOfDetail level;
+  level.samples_along = static_cast<int>(state.range(0));
+  runTessellation(state, TessellationMethod::CachedBasis, level);
+}
+
 BENCHMARK(BM_Tessellate_ForwardDifferencing);
 BENCHMARK(BM_Tessellate_DeBoor);
 BENCHMARK(BM_Tessellate_CachedBasis);
+BENCHMARK(BM_Tessellate_CachedBasisAlong)->Arg(4)->Arg(8)->Arg(16)->Arg(32);
 
 }  // namespace

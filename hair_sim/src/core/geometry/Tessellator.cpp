@@ -292,8 +292,12 @@ void prepareMesh(StripMesh& mesh, int n_u, int n_v) {
     u_param[iu] = static_cast<float>(iu) * inverse;
   }
   u_param[n_u - 1] = 1.0f;
-  for (std::size_t i = static_cast<std::size_t>(n_u); i < count; ++i) {  // the other rows repeat row 0
-    u_param[i] = u_param[i - static_cast<std::size_t>(n_u)];
+  // The other rows repeat row 0, copied from row 0 itself: copying each row from the one before would
+  // chain every load to the store just before it (a store-to-load forward per n_u floats).
+  for (std::size_t row = static_cast<std::size_t>(n_u); row < count; row += static_cast<std::size_t>(n_u)) {
+    for (int iu = 0; iu < n_u; ++iu) {
+      u_param[row + static_cast<std::size_t>(iu)] = u_param[iu];
+    }
   }
 }
 
