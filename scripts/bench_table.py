@@ -45,6 +45,13 @@ def main():
     for name in ('BM_Tessellate_CachedBasis', 'BM_Tessellate_ForwardDifferencing', 'BM_Tessellate_DeBoor'):
         if name in bench:
             lines.append('| %s | %.1f |' % (name.replace('BM_Tessellate_', ''), 1e9 / bench[name]['items_per_second']))
+    # CachedBasis at more samples along (BM_Tessellate_CachedBasisAlong/<samples_along>): longer columns share
+    # each strip's and each column's fixed work among more vertices.
+    along = sorted((int(n.split('/')[1]), 1e9 / bench[n]['items_per_second']) for n in bench
+                   if n.startswith('BM_Tessellate_CachedBasisAlong/'))
+    if along:
+        lines.append('| CachedBasis at samples_along %s (the default is 4) | %s |' % (
+            ' / '.join(str(a) for a, _ in along), ' / '.join('%.1f' % ns for _, ns in along)))
     # The node's whole mesh per frame (tessellation, scalp, bodies, look): BM_MeshBuild/<strips>/<threads>,
     # wall time.
     mesh = {tuple(n.split('/')[1:3]): 1e9 / bench[n]['items_per_second'] for n in bench
