@@ -10,51 +10,17 @@
 # On this shared VM one binary's runs differ by 20-30 % minutes apart: a change of a few per cent needs many
 # rounds, and a median ratio within 0.95-1.05 is no evidence either way (docs/benchmarks.md).
 set -euo pipefail
-export PATH=/usr/bin:$PATH
 if [ $# -lt 1 ]; then
   sed -n '2,11p' "$0" >&2
   exit 2
 fi
-ROOT="$(cd "$(dirname "$0")/.." && pwd)"
-OLD="$(git -C "$ROOT" rev-parse --verify -q "$1^{commit}")" || {
-  echo "ab_step: '$1' is not a commit of this repository" >&2
-  exit 2
-}
 STRIPS=${2:-1000}
 ROUNDS=${3:-8}
 SUBSTEPS=${4:-480}
-AB_DIR=${AB_DIR:-/tmp/hair_sim_ab}
 CORE=${AB_CORE:-0}
-
-configure() {  # source dir, build dir
-  cmake -S "$1" -B "$2" -DCMAKE_BUILD_TYPE=Release -DCATKIN_DEVEL_PREFIX="$2/devel" \
-    -DCATKIN_ENABLE_TESTING=OFF >"$2.cmake.log" 2>&1 || {
-    echo "ab_step: cmake failed for $1 (see $2.cmake.log)" >&2
-    exit 1
-  }
-}
-
-mkdir -p "$AB_DIR"
-if [ "$(git -C "$AB_DIR/src" rev-parse --show-toplevel 2>/dev/null)" = "$AB_DIR/src" ]; then
-  git -C "$AB_DIR/src" checkout -q --detach "$OLD"
-else  # none yet, or a directory left without its worktree
-  rm -rf "$AB_DIR/src"
-  git -C "$ROOT" worktree prune
-  git -C "$ROOT" worktree add -q --detach "$AB_DIR/src" "$OLD"
-fi
-mkdir -p "$AB_DIR/build" "$ROOT/build-release"
-configure "$AB_DIR/src" "$AB_DIR/build"
-configure "$ROOT" "$ROOT/build-release"
-cmake --build "$AB_DIR/build" -j"$(nproc)" --target hair_sim_step_profile >"$AB_DIR/build.log" 2>&1 || {
-  echo "ab_step: build of $OLD failed (see $AB_DIR/build.log)" >&2
-  exit 1
-}
-cmake --build "$ROOT/build-release" -j"$(nproc)" --target hair_sim_step_profile >"$AB_DIR/build-new.log" 2>&1 || {
-  echo "ab_step: build of the working tree failed (see $AB_DIR/build-new.log)" >&2
-  exit 1
-}
-OLD_BIN="$AB_DIR/build/devel/lib/hair_sim/hair_sim_step_profile"
-NEW_BIN="$ROOT/build-release/devel/lib/hair_sim/hair_sim_step_profile"
+# shellcheck source=scripts/ab_build.sh
+. "$(dirname "$0")/ab_build.sh"
+ab_build "$1" hair_sim_step_profile
 
 run() {  # binary -> "ns_per_update state_hash"
   taskset -c "$CORE" "$1" --strips "$STRIPS" --warmup 240 --substeps "$SUBSTEPS" |
