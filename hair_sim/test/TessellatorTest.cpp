@@ -464,6 +464,30 @@ TEST(TessellatorTest, BadInputsThrowNamingTheValue) {
   std::vector<Vec3> bad = grid;
   bad[6].z() = std::numeric_limits<double>::infinity();
   expectInvalid([&] { tessellator.tessellate(bad, 2, 5, 0.3, mesh); }, "control point 6 (column 0, row 3)");
+  // Every coordinate of the grid (both halves of the SIMD check's pairs), NaN and infinities alike; and the
+  // last coordinate of a grid with an odd count of them (3 x 5 x 3 = 45: the scalar tail).
+  const double non_finite[3] = {std::numeric_limits<double>::quiet_NaN(),
+                                std::numeric_limits<double>::infinity(),
+                                -std::numeric_limits<double>::infinity()};
+  for (int k = 0; k < 30; ++k) {
+    bad = grid;
+    bad[static_cast<std::size_t>(k / 3)][k % 3] = non_finite[k % 3];
+    expectInvalid([&] { tessellator.tessellate(bad, 2, 5, 0.3, mesh); },
+                  "control point " + std::to_string(k / 3) + " (");
+  }
+  std::vector<Vec3> wide(15);
+  for (int i = 0; i < 15; ++i) {
+    wide[static_cast<std::size_t>(i)] = Vec3(0.01 * (i % 3), 0.0, -0.05 * (i / 3));
+  }
+  EXPECT_NO_THROW(tessellator.tessellate(wide, 3, 5, 0.3, mesh));
+  wide[14].z() = std::numeric_limits<double>::quiet_NaN();
+  expectInvalid([&] { tessellator.tessellate(wide, 3, 5, 0.3, mesh); }, "control point 14 (column 2, row 4)");
+  // Finite extremes are finite: the largest, the smallest subnormal, negative zero.
+  bad = grid;
+  bad[3].x() = std::numeric_limits<double>::max();
+  bad[4].y() = std::numeric_limits<double>::denorm_min();
+  bad[5].z() = -0.0;
+  EXPECT_NO_THROW(tessellator.tessellate(bad, 2, 5, 0.3, mesh));
   expectInvalid(
       [] {
         Tessellator::triangleCount({{2, 5}, {1, 5}}, LevelOfDetail{});

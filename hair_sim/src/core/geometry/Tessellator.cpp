@@ -240,12 +240,25 @@ void normalizeFrames(Vec3* normals, Vec3* tangents, std::size_t count) {
   }
 }
 
-/// True when none of the `count` doubles is infinite or NaN (exponent bits all ones). Integer operations and
-/// no branch: a cheap loop over the coordinates (GCC and clang vectorise it only where the target has 64-bit
-/// integer comparisons, e.g. with AVX2; on the x86-64 baseline it stays scalar).
+/// True when none of the `count` doubles is infinite or NaN (exponent bits all ones). Integer operations (no
+/// floating-point exception flag is raised) and no branch. SSE2 has no 64-bit integer comparison: two doubles
+/// at a time, their high 32-bit halves hold the exponent bits.
 bool allFinite(const double* values, std::size_t count) {
+  std::size_t i = 0;
+#if defined(HAIR_SIM_SSE2)
+  const __m128i exponent = _mm_set_epi32(0x7FF00000, 0, 0x7FF00000, 0);
+  __m128i all_ones = _mm_setzero_si128();  // per high half: its exponent bits were all ones
+  for (; i + 2 <= count; i += 2) {
+    const __m128i bits = _mm_loadu_si128(reinterpret_cast<const __m128i*>(values + i));
+    all_ones = _mm_or_si128(all_ones, _mm_cmpeq_epi32(_mm_and_si128(bits, exponent), exponent));
+  }
+  // The low halves compare 0 == 0: only the high halves count.
+  if (_mm_movemask_epi8(_mm_and_si128(all_ones, _mm_set_epi32(-1, 0, -1, 0))) != 0) {
+    return false;
+  }
+#endif
   std::uint64_t non_finite = 0;
-  for (std::size_t i = 0; i < count; ++i) {
+  for (; i < count; ++i) {
     std::uint64_t bits;
     std::memcpy(&bits, values + i, sizeof bits);
     non_finite |= static_cast<std::uint64_t>((bits & 0x7FF0000000000000ULL) == 0x7FF0000000000000ULL);
@@ -253,8 +266,9 @@ bool allFinite(const double* values, std::size_t count) {
   return non_finite == 0;
 }
 
-/// Sets the vertex count (resizing only changes capacity when the mesh grows) and u_param.
-void prepareMesh(StripMesh& mesh, int n_u, int n_v) {
+/// Sets the vertex count (resizing only changes capacity when the mesh grows) and u_param (a copy of
+/// `u_param`, the whole grid's).
+void prepareMesh(StripMesh& mesh, int n_u, int n_v, const std::vector<float>& u_param) {
   const std::size_t count = static_cast<std::size_t>(n_u) * static_cast<std::size_t>(n_v);
   mesh.n_u = n_u;
   mesh.n_v = n_v;
@@ -263,19 +277,7 @@ void prepareMesh(StripMesh& mesh, int n_u, int n_v) {
   mesh.tangents.resize(count);
   mesh.v_param.resize(count);
   mesh.u_param.resize(count);
-  const float inverse = 1.0f / static_cast<float>(n_u - 1);
-  float* u_param = mesh.u_param.data();
-  for (int iu = 0; iu < n_u; ++iu) {
-    u_param[iu] = static_cast<float>(iu) * inverse;
-  }
-  u_param[n_u - 1] = 1.0f;
-  // The other rows repeat row 0, copied from row 0 itself: copying each row from the one before would
-  // chain every load to the store just before it (a store-to-load forward per n_u floats).
-  for (std::size_t row = static_cast<std::size_t>(n_u); row < count; row += static_cast<std::size_t>(n_u)) {
-    for (int iu = 0; iu < n_u; ++iu) {
-      u_param[row + static_cast<std::size_t>(iu)] = u_param[iu];
-    }
-  }
+  std::memcpy(mesh.u_param.data(), u_param.data(), count * sizeof(float));
 }
 
 void validateLevel(const LevelOfDetail& level, const char* where) {
@@ -1041,6 +1043,23 @@ void Tessellator::buildTable(int control_count, int degree, int samples_per_span
   }
 }
 
+const std::vector<float>& Tessellator::uParam(int n_u, int n_v) {
+  if (n_u == u_param_n_u_ && n_v == u_param_n_v_) {
+    return u_param_;
+  }
+  u_param_.resize(static_cast<std::size_t>(n_u) * static_cast<std::size_t>(n_v));
+  const float inverse = 1.0f / static_cast<float>(n_u - 1);
+  for (int iv = 0; iv < n_v; ++iv) {
+    for (int iu = 0; iu < n_u; ++iu) {
+      u_param_[static_cast<std::size_t>(iv) * n_u + iu] =
+          iu == n_u - 1 ? 1.0f : static_cast<float>(iu) * inverse;
+    }
+  }
+  u_param_n_u_ = n_u;
+  u_param_n_v_ = n_v;
+  return u_param_;
+}
+
 const Tessellator::BasisTable& Tessellator::acrossTable(int columns) {
   for (const BasisTable& table : across_tables_) {
     if (table.control_count == columns) {
@@ -1155,7 +1174,9 @@ void Tessellator::tessellate(const Vec3* control_points, int columns, int rows, 
                                   ") is not finite");
     }
   }
-  prepareMesh(mesh, verticesAcross(columns, level_of_detail_), verticesAlong(rows, level_of_detail_));
+  const int n_u = verticesAcross(columns, level_of_detail_);
+  const int n_v = verticesAlong(rows, level_of_detail_);
+  prepareMesh(mesh, n_u, n_v, uParam(n_u, n_v));
   switch (method_) {
     case TessellationMethod::ForwardDifferencing:
       tessellateForwardDifferencing(control_points, columns, rows, hair_length, mesh);

@@ -161,6 +161,8 @@ class Tessellator {
     Vec3 d_dv = Vec3::Zero();
   };
 
+  /// u_param of an n_u x n_v mesh (built when the grid size changes).
+  const std::vector<float>& uParam(int n_u, int n_v);
   const BasisTable& acrossTable(int columns);
   const BasisTable& alongTable(int rows);
   static void buildTable(int control_count, int degree, int samples_per_span, BasisTable& table);
@@ -185,6 +187,9 @@ class Tessellator {
   std::vector<double> broadcast_;  ///< CachedBasis (SIMD): control coordinates, each twice
   std::vector<double> curve_;      ///< CachedBasis: control column curves at the v samples
   std::vector<double> curve_dv_;   ///< CachedBasis: their d/dv
+  std::vector<float> u_param_;     ///< StripMesh::u_param of an n_u x n_v grid (uParam)
+  int u_param_n_u_ = 0;
+  int u_param_n_v_ = 0;
 };
 
 }  // namespace hair_sim
