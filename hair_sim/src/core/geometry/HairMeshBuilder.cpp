@@ -6,12 +6,39 @@
 #include <string>
 
 #include "../LaneWorkers.hpp"
+#include "../SimdDispatch.hpp"
 
 namespace hair_sim {
 
 namespace {
 /// Bodies whose test the bounding box of a strip's vertices can skip (the others are always tested).
 constexpr std::size_t kMaxBoxedBodies = 64;
+
+/// For each group g of four vertices (xyz[12 g ...], three doubles each): bit t of masks[g] is set when one
+/// of them may be in reach of body t, that is when its squared distance to centres[t] is not over reach2[t]
+/// (NaN included). Branch-free over the vertices, four at a time (GCC's vector extension; AVX2 where the CPU
+/// has it, chosen at load time; HairMeshBuilderSimdPathsBitIdentical compares the two).
+#if defined(HAIR_SIM_AVX2_DISPATCH)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void reachMasks(const double* xyz, std::size_t groups, const double* centres, const double* reach2,
+                std::size_t bodies, std::uint64_t* masks) {
+  typedef double V __attribute__((vector_size(32)));
+  for (std::size_t g = 0; g < groups; ++g) {
+    const double* p = xyz + 12 * g;
+    const V x = {p[0], p[3], p[6], p[9]};
+    const V y = {p[1], p[4], p[7], p[10]};
+    const V z = {p[2], p[5], p[8], p[11]};
+    std::uint64_t mask = 0;
+    for (std::size_t t = 0; t < bodies; ++t) {
+      const V dx = x - centres[3 * t], dy = y - centres[3 * t + 1], dz = z - centres[3 * t + 2];
+      const auto out = (dx * dx + dy * dy + dz * dz) > reach2[t];  // false for NaN
+      const bool all_out = (out[0] & out[1] & out[2] & out[3]) != 0;
+      mask |= static_cast<std::uint64_t>(!all_out) << t;
+    }
+    masks[g] = mask;
+  }
+}
 
 LevelOfDetail chooseLevel(const Hairstyle& style, const HairMeshOptions& o) {
   if (o.max_triangles <= 0) return o.level_of_detail;
@@ -154,31 +181,41 @@ void HairMeshBuilder::buildStrips(std::size_t first_strip, std::size_t last_stri
     std::size_t k = first_tested;
     const std::size_t count = mesh.positions.size();
     if (!all_tested && tested_count == 0) k = count;  // no body can act: every vertex stays
-    for (; !all_tested && k + 4 <= count; k += 4) {
-      const Vec3* q = &mesh.positions[k];
-      bool may_act = false;
-      for (std::size_t t = 0; t < tested_count && !may_act; ++t) {
-        const Ellipsoid& e = bodies[tested[t]];
-        const Vec3& c = e.center();
-        const double reach2 = body_reach2_[tested[t]] * (1.0 + 1e-9);
-        double d[4][3];
-        bool within = false;
-        for (int l = 0; l < 4; ++l) {
-          d[l][0] = q[l].x() - c.x(), d[l][1] = q[l].y() - c.y(), d[l][2] = q[l].z() - c.z();
-          within |= !(d[l][0] * d[l][0] + d[l][1] * d[l][1] + d[l][2] * d[l][2] > reach2);
+    // (buildStrips runs on several threads at once: its buffers are on the stack.)
+    double centres[3 * kMaxBoxedBodies];
+    double reach2[kMaxBoxedBodies];
+    for (std::size_t t = 0; t < tested_count; ++t) {
+      const Vec3& c = bodies[tested[t]].center();
+      for (int r = 0; r < 3; ++r) centres[3 * t + static_cast<std::size_t>(r)] = c[r];
+      reach2[t] = body_reach2_[tested[t]] * (1.0 + 1e-9);
+    }
+    constexpr std::size_t kChunk = 64;  // groups of four vertices per call
+    std::uint64_t masks[kChunk];
+    while (!all_tested && k + 4 <= count) {
+      const std::size_t groups = std::min(kChunk, (count - k) / 4);
+      reachMasks(mesh.positions[k].data(), groups, centres, reach2, tested_count, masks);
+      for (std::size_t g = 0; g < groups; ++g, k += 4) {
+        std::uint64_t in_reach = masks[g];  // most groups: no body in reach
+        if (in_reach == 0) continue;
+        const Vec3* q = &mesh.positions[k];
+        bool may_act = false;
+        for (; in_reach != 0 && !may_act; in_reach &= in_reach - 1) {
+          const std::size_t t = static_cast<std::size_t>(__builtin_ctzll(in_reach));
+          const Ellipsoid& e = bodies[tested[t]];
+          const Vec3& c = e.center();
+          const Mat3& m = e.Sinv();
+          for (int l = 0; l < 4; ++l) {
+            const double dx = q[l].x() - c.x(), dy = q[l].y() - c.y(), dz = q[l].z() - c.z();
+            const double sx = m(0, 0) * dx + m(0, 1) * dy + m(0, 2) * dz;
+            const double sy = m(1, 0) * dx + m(1, 1) * dy + m(1, 2) * dz;
+            const double sz = m(2, 0) * dx + m(2, 1) * dy + m(2, 2) * dz;
+            const double s2 = sx * sx + sy * sy + sz * sz;
+            may_act |= !(s2 - 1.0 > 1e-9 * (1.0 + s2));  // (out of reach but inside: tested anyway)
+          }
         }
-        if (!within) continue;  // most groups, for most bodies
-        const Mat3& m = e.Sinv();
-        for (int l = 0; l < 4; ++l) {
-          const double sx = m(0, 0) * d[l][0] + m(0, 1) * d[l][1] + m(0, 2) * d[l][2];
-          const double sy = m(1, 0) * d[l][0] + m(1, 1) * d[l][1] + m(1, 2) * d[l][2];
-          const double sz = m(2, 0) * d[l][0] + m(2, 1) * d[l][1] + m(2, 2) * d[l][2];
-          const double s2 = sx * sx + sy * sy + sz * sz;
-          may_act |= !(s2 - 1.0 > 1e-9 * (1.0 + s2));  // (out of reach but inside: tested anyway)
-        }
+        if (may_act)
+          for (int l = 0; l < 4; ++l) exact(k + static_cast<std::size_t>(l));
       }
-      if (may_act)
-        for (int l = 0; l < 4; ++l) exact(k + static_cast<std::size_t>(l));
     }
     for (; k < count; ++k) exact(k);
     std::vector<double>& profiles = profiles_[s];  // the stripes depend on the seed and n_u only
