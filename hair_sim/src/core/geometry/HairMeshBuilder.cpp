@@ -40,6 +40,53 @@ void reachMasks(const double* xyz, std::size_t groups, const double* centres, co
   }
 }
 
+/// The bounding box (lo, hi) of `count` >= 1 vertices (xyz, three doubles each), and whether every coordinate
+/// is finite (the box is then exact: min and max do not round). Four vertices at a time as reachMasks.
+#if defined(HAIR_SIM_AVX2_DISPATCH)
+__attribute__((target_clones("avx2", "default")))
+#endif
+bool boundingBox(const double* xyz, std::size_t count, double lo[3], double hi[3]) {
+  typedef double V __attribute__((vector_size(32)));
+  for (int r = 0; r < 3; ++r) lo[r] = hi[r] = xyz[r];
+  std::size_t k = 0;
+  if (count >= 4) {
+    // Four vertices are three vectors: [x0 y0 z0 x1] [y1 z1 x2 y2] [z2 x3 y3 z3].
+    V low[3], high[3];
+    for (int j = 0; j < 3; ++j) {
+      V v;
+      __builtin_memcpy(&v, xyz + 4 * j, sizeof v);
+      low[j] = high[j] = v;
+    }
+    V non_finite = V{} + 0.0;  // v - v: 0 when finite, NaN otherwise
+    for (; k + 4 <= count; k += 4) {
+      for (int j = 0; j < 3; ++j) {
+        V v;
+        __builtin_memcpy(&v, xyz + 3 * k + 4 * j, sizeof v);
+        low[j] = v < low[j] ? v : low[j];
+        high[j] = v > high[j] ? v : high[j];
+        non_finite += v - v;
+      }
+    }
+    for (int j = 0; j < 3; ++j)
+      for (int l = 0; l < 4; ++l) {
+        const int r = (4 * j + l) % 3;
+        lo[r] = std::min(lo[r], low[j][l]);
+        hi[r] = std::max(hi[r], high[j][l]);
+      }
+    if (!(non_finite[0] == 0.0 && non_finite[1] == 0.0 && non_finite[2] == 0.0 && non_finite[3] == 0.0))
+      return false;
+  }
+  bool finite = true;
+  for (; k < count; ++k)
+    for (int r = 0; r < 3; ++r) {
+      const double v = xyz[3 * k + static_cast<std::size_t>(r)];
+      lo[r] = std::min(lo[r], v);
+      hi[r] = std::max(hi[r], v);
+      finite = finite && v - v == 0.0;
+    }
+  return finite;
+}
+
 LevelOfDetail chooseLevel(const Hairstyle& style, const HairMeshOptions& o) {
   if (o.max_triangles <= 0) return o.level_of_detail;
   std::vector<StripShape> shapes;
@@ -140,16 +187,11 @@ void HairMeshBuilder::buildStrips(std::size_t first_strip, std::size_t last_stri
     // included), unless a projection out of an earlier body has moved the vertex. A non-finite vertex (the
     // box would leave it out) has every body tested, as without the box.
     const std::size_t first_tested = static_cast<std::size_t>(mesh.n_u);
-    Vec3 box_lo = mesh.positions[first_tested], box_hi = box_lo;
-    double sum = 0.0;  // not finite when a coordinate is not (or, harmlessly, when the sum overflows)
-    for (std::size_t k = first_tested; k < mesh.positions.size(); ++k) {
-      const Vec3& p = mesh.positions[k];
-      box_lo = box_lo.cwiseMin(p);
-      box_hi = box_hi.cwiseMax(p);
-      sum += p.x() + p.y() + p.z();
-    }
+    Vec3 box_lo, box_hi;
+    const bool finite = boundingBox(mesh.positions[first_tested].data(), mesh.positions.size() - first_tested,
+                                    box_lo.data(), box_hi.data());
     bool near[kMaxBoxedBodies];
-    const std::size_t boxed = std::isfinite(sum) ? std::min(bodies.size(), kMaxBoxedBodies) : 0;
+    const std::size_t boxed = finite ? std::min(bodies.size(), kMaxBoxedBodies) : 0;
     for (std::size_t b = 0; b < boxed; ++b) {
       const Vec3& c = bodies[b].center();
       const Vec3 gap = (box_lo - c).cwiseMax(c - box_hi).cwiseMax(0.0);  // per axis: 0 when c is within
