@@ -1,8 +1,8 @@
 /// Prints a hash of the positions of every mesh vertex HairMeshBuilder builds, with the count of vertices
 /// moved out of a body, for curved strips hanging through five bodies at three levels of detail (most
 /// groups of four vertices out of reach of most bodies, some in reach but outside, some inside, some strips
-/// so far out that their vertices overflow). Built twice: against hair_sim_core (the bounding box and reach
-/// test compiled for AVX2 too, chosen at load time) and with HairMeshBuilder.cpp compiled with
+/// so far out that their squared distances overflow). Built twice: against hair_sim_core (the bounding box
+/// and reach test compiled for AVX2 too, chosen at load time) and with HairMeshBuilder.cpp compiled with
 /// -DHAIR_SIM_NO_AVX2 (the x86-64 baseline alone); the test HairMeshBuilderSimdPathsBitIdentical compares the
 /// two outputs.
 #include <cmath>
