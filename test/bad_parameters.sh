@@ -8,7 +8,9 @@ DEVEL=$1 SOURCE=$2
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 TMP=$(mktemp -d /tmp/hair_sim_bad_params.XXXXXX)
 export ROS_HOSTNAME=localhost ROS_HOME=$TMP/ros_home ROS_LOG_DIR=$TMP/ros_home/log
-PORT=$((20000 + RANDOM % 20000))
+# shellcheck source=test/free_port.sh
+. "$(dirname "$0")/free_port.sh"
+PORT=$(free_port)
 export ROS_MASTER_URI=http://localhost:$PORT
 set +u
 # shellcheck disable=SC1091

@@ -18,7 +18,9 @@ DESTDIR=$DEST cmake --install "$BUILD" >"$DEST.log" 2>&1 || { cat "$DEST.log"; r
 rm -f "$DEST.log"
 SPACE=$DEST$PREFIX
 echo "install_space: installed into $SPACE"
-PORT=$((20000 + RANDOM % 20000))
+# shellcheck source=test/free_port.sh
+. "$(dirname "$0")/free_port.sh"
+PORT=$(free_port)
 env -i HOME="$HOME" PATH=/usr/bin:/bin:/usr/sbin:/sbin ROS_HOSTNAME=localhost ROS_HOME="$DEST/ros_home" \
   ROS_MASTER_URI=http://localhost:$PORT SPACE="$SPACE" SOURCE="$SOURCE" PORT="$PORT" bash -c '
 set -eo pipefail

@@ -29,7 +29,9 @@ wait_topic() {
 }
 
 # ---- live run
-PORT=$((20000 + RANDOM % 20000))
+# shellcheck source=test/free_port.sh
+. "$(dirname "$0")/free_port.sh"
+PORT=$(free_port)
 export ROS_MASTER_URI=http://localhost:$PORT
 timeout 60 roscore -p "$PORT" >"$OUT/live_roscore.log" 2>&1 & PIDS+=($!)
 sleep 2
@@ -65,7 +67,7 @@ stop_all
 [ -f "$OUT/live.bag" ] || { echo "rosbag_roundtrip: FAIL: no live.bag"; exit 1; }
 
 # ---- replay with simulated time
-PORT=$((20000 + RANDOM % 20000))
+PORT=$(free_port)
 export ROS_MASTER_URI=http://localhost:$PORT
 timeout 60 roscore -p "$PORT" >"$OUT/replay_roscore.log" 2>&1 & PIDS+=($!)
 sleep 2

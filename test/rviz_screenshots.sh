@@ -15,7 +15,9 @@ fi
 set +u
 # shellcheck disable=SC1091
 source "$DEVEL/setup.bash"
-PORT=$((20000 + RANDOM % 20000))
+# shellcheck source=test/free_port.sh
+. "$(dirname "$0")/free_port.sh"
+PORT=$(free_port)
 export ROS_MASTER_URI=http://localhost:$PORT ROS_HOSTNAME=localhost ROS_HOME=${ROS_HOME:-$OUT/ros_home}
 timeout 120 roslaunch -p "$PORT" "$ROOT/launch/demo.launch" >"$OUT/roslaunch.log" 2>&1 &
 LAUNCH=$!
