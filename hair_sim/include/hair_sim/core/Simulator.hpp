@@ -234,7 +234,7 @@ class Simulator {
   /// The valid direction nearest to dir (bisection toward an escape direction) for the bodies.
   template <typename ValidFor, typename ValidAll>
   Vec3 escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const ValidFor& valid_for,
-                    const ValidAll& valid_all, const std::vector<Ellipsoid>& now) const;
+                    const ValidAll& valid_all, const std::vector<Ellipsoid>& now, bool have_before) const;
   /// Maps the pivot and the previous end of a segment into the sphere space of every body and keeps
   /// the bodies within its reach (near_); resolveCollisions and the reaction constraint use them.
   void prepareBodies(const Vec3& pivot, double d, const Vec3& previous_end, const std::vector<Ellipsoid>& now,
@@ -247,6 +247,14 @@ class Simulator {
   /// segment not cutting through it, the end's path over the substep not entering it?
   bool clearOf(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
                bool have_before) const;
+  /// The first of clearOf's tests over near_ that direction u fails: its body and kind (0 the end inside, 1
+  /// the segment through, 2 the end's path into it); false when u is clear.
+  bool failedTest(double d, const Vec3& u, const std::vector<Ellipsoid>& now, bool have_before,
+                  std::size_t& body, int& kind) const;
+  /// The margin of that test for direction u: positive where it passes (up to rounding at its boundary),
+  /// smooth and of the first order in u at the boundary, for escapeBodies to interpolate.
+  double testMargin(std::size_t body, int kind, double d, const Vec3& u,
+                    const std::vector<Ellipsoid>& now) const;
   /// clearOf for every near body.
   bool clearOfAll(double d, const Vec3& u, const std::vector<Ellipsoid>& now, bool have_before) const;
   /// The bodies' part of resolveCollisions (prepareBodies first): dir when the segment is clear of every
