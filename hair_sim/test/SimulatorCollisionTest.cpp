@@ -90,6 +90,51 @@ TEST(SimulatorCollisionTest, ReactionConstraintHoldsHairOnABodyWithoutPenetratio
   EXPECT_LT(nearest, 1e-3);
 }
 
+TEST(SimulatorCollisionTest, EscapeStopsASegmentOnTheSurfaceItWasThrownInto) {
+  // Two columns of 0.1 m segments hanging from (0, +-0.005, ~0.1), a 1000 m/s gust along +x and a step bound
+  // of 0.8 rad: the free step swings the first segments 0.8 rad (t, from straight down, in the x-z plane)
+  // into a bar along y (an ellipsoid 100 m long: a circle of radius R in every x-z plane here) centred 0.1 m
+  // beside the pivots and 0.1 m below them. The escape turns a segment toward the outward normal at the
+  // pivot's nearest point of the body, (-1, 0, 1) / sqrt 2, t = 5 pi / 4: 3.14 rad on, so the short way round
+  // is over the top of the bar, past the far edge of the range where the end is inside: t_C + acos(a / L),
+  // from the intersection of the circle |end - pivot| = L with the bar's section (centre C at distance D,
+  // angle t_C; a = (L^2 - R^2 + D^2) / (2 D)). The end must stop there, clear of the inflated surface by the
+  // end test's 1e-12 and by no more than the escape's bracket of 2^-33 rad allows (0.1 m * 2^-33 = 1.2e-11 m,
+  // an implicit value of 2 * 1.2e-11 / 0.054 = 4.3e-10).
+  PhysicsParameters p = quiet();
+  p.max_angle_step = 0.8;
+  p.air_drag = 0.05;
+  const double L = 0.1;
+  const Hairstyle style = test::hangingStrip(2, 4, L, 0.0);
+  const Body bar = worldBody("bar", Vec3(0.1, 0.0, 0.0), Vec3(0.05, 100.0, 0.05));
+  const Ellipsoid inflated = bar.shape.inflated(style.strips[0].thickness_margin);
+  StepInputs in;
+  in.wind = Vec3(1000.0, 0.0, 0.0);
+  in.body_frames = {Iso3::Identity()};
+  Simulator free_sim(style, p);
+  free_sim.step(in);
+  for (std::size_t k = 2; k < 4; ++k) {
+    const Vec3 swing = free_sim.positionsHead()[k] - free_sim.positionsHead()[k - 2];
+    ASSERT_NEAR(std::atan2(swing.x(), -swing.z()), 0.8, 1e-9) << "the free step must swing 0.8 rad";
+    ASSERT_LT(inflated.implicitValue(free_sim.positionsHead()[k]), 0.0) << "the free step must end inside";
+  }
+  Simulator sim(style, p, {bar});
+  sim.step(in);
+  EXPECT_GE(sim.collisionCount(), 2);
+  for (std::size_t k = 2; k < 4; ++k) {
+    const Vec3& pivot = sim.positionsHead()[k - 2];
+    const Vec3& end = sim.positionsHead()[k];
+    EXPECT_GT(inflated.implicitValue(end), 1e-12) << "point " << k;
+    EXPECT_LT(inflated.implicitValue(end), 1e-9) << "point " << k;
+    const double R = inflated.radii().x() * std::sqrt(1.0 - std::pow(pivot.y() / inflated.radii().y(), 2));
+    const Vec3 c = bar.shape.center() - pivot;
+    const double D = std::hypot(c.x(), c.z());
+    const double a = (L * L - R * R + D * D) / (2.0 * D);
+    const double far_edge = std::atan2(c.x(), -c.z()) + std::acos(a / L);
+    EXPECT_NEAR(std::atan2(end.x() - pivot.x(), pivot.z() - end.z()), far_edge, 1e-9) << "point " << k;
+  }
+}
+
 SimConfig defaultConfig() { return loadSimConfig(test::repoPath("config/hair_sim.yaml")); }
 
 TEST(SimulatorCollisionTest, ViolentHeadShakeWithWindOntoHeadAndShouldersNeverPenetrates) {
