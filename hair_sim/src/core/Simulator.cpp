@@ -1094,11 +1094,12 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
       double f_lo = testMargin(body, kind, d, lo, now), f_hi = testMargin(body, kind, d, hi, now);
       const double eps = 0.5 * kEscapeTolerance;
       const double k1 = 0.2 / width;  // the truncation 0.2 width^2 / (first width), as the paper suggests
-      const int n_max = static_cast<int>(std::ceil(std::log2(width / kEscapeTolerance))) + 1;
-      for (int j = 0; j < 64 && width > kEscapeTolerance; ++j) {
+      // eps 2^(n_max - j) for probe j, n_max = ceil(log2(width / (2 eps))) + 1 (halved per probe: exact).
+      double reach = std::ldexp(eps, static_cast<int>(std::ceil(std::log2(width / kEscapeTolerance))) + 1);
+      for (int j = 0; j < 64 && width > kEscapeTolerance; ++j, reach *= 0.5) {
         // Places along the chord: lo at 0, hi at width.
         const double x_half = 0.5 * width;
-        const double r = std::max(0.0, std::ldexp(eps, n_max - j) - x_half);
+        const double r = std::max(0.0, reach - x_half);
         const double delta = k1 * width * width;
         const double x_f = (f_lo < 0.0 && f_hi > 0.0) ? width * (f_lo / (f_lo - f_hi)) : x_half;
         const double sigma = x_half >= x_f ? 1.0 : -1.0;
