@@ -124,7 +124,9 @@ TEST(SimulatorCollisionTest, EscapeStopsASegmentOnTheSurfaceItWasThrownInto) {
   for (std::size_t k = 2; k < 4; ++k) {
     const Vec3& pivot = sim.positionsHead()[k - 2];
     const Vec3& end = sim.positionsHead()[k];
-    EXPECT_GT(inflated.implicitValue(end), 1e-12) << "point " << k;
+    // (The end test's 1e-12 less rounding: the escape maps the pivot and the direction into sphere space
+    // apart, implicitValue the end; they differ by ~1e-16.)
+    EXPECT_GT(inflated.implicitValue(end), 1e-12 - 1e-14) << "point " << k;
     EXPECT_LT(inflated.implicitValue(end), 1e-9) << "point " << k;
     const double R = inflated.radii().x() * std::sqrt(1.0 - std::pow(pivot.y() / inflated.radii().y(), 2));
     const Vec3 c = bar.shape.center() - pivot;
