@@ -1074,18 +1074,23 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   const std::size_t nb = now.size();
   // The valid direction closest to `dir` on the arc dir -> to (`to` valid): a bracket [lo blocked, hi clear]
   // narrowed until it is at most kEscapeTolerance wide (as the chord |hi - lo|), hi returned. The first
-  // midpoint by rotation (the arc may be up to pi long); after it the arc is at most pi / 2 long and its
-  // points are normalised weighted sums of its unit ends (|lo + hi| >= sqrt 2): no sine or cosine per probe.
-  // Then the ITP method (Oliveira and Takahashi, ACM TOMS 47(1), 2020) on testMargin of the test that lo
-  // fails (smooth and of the first order at its edge): regula falsi, truncated toward the midpoint and
-  // projected into a range about it that keeps the probes within one of a bisection's. Each probe is put on
-  // its side by the tests themselves (validBodies), so hi is always clear; where lo passes the test followed
-  // so far, the test it fails is followed instead. 7.3-7.6 probes where the bisection took 35.6
-  // (docs/benchmarks.md).
+  // midpoint is the normalised sum of the ends, or by rotation for an arc near pi long; after it the arc is
+  // at most pi / 2 long and its points are normalised weighted sums of its unit ends (|lo + hi| >= sqrt 2):
+  // no sine or cosine per probe. Then the ITP method (Oliveira and Takahashi, ACM TOMS 47(1), 2020) on
+  // testMargin of the test that lo fails (smooth and of the first order at its edge): regula falsi, truncated
+  // toward the midpoint and projected into a range about it that keeps the probes within one of a
+  // bisection's. Each probe is put on its side by the tests themselves (validBodies), so hi is always clear;
+  // where lo passes the test followed so far, the test it fails is followed instead. 7.3-7.6 probes where the
+  // bisection took 35.6 (docs/benchmarks.md).
   auto bisect = [&](const Vec3& to) {
     Vec3 lo = dir.normalized();
     Vec3 hi = to.normalized();
-    const Vec3 half = rotateByVector(0.5 * rotationVectorBetween(lo, hi), lo).normalized();
+    // (The midpoint of an arc shorter than about 170 degrees is the normalised sum of its ends; a longer
+    // one's by rotation.)
+    const Vec3 sum = lo + hi;
+    const Vec3 half = sum.squaredNorm() > 0.01
+                          ? Vec3(sum.normalized())
+                          : Vec3(rotateByVector(0.5 * rotationVectorBetween(lo, hi), lo).normalized());
     (validBodies(half) ? hi : lo) = half;
     std::size_t body = 0;
     int kind = 0;
