@@ -24,7 +24,7 @@ def main():
     if len(sys.argv) > 2:
         with open(sys.argv[2]) as f:
             node = json.load(f)
-    lines = ['| strips | control points | ns per control-point update | real-time factor at 240 Hz '
+    lines = ['| strips | control points | ns per control-point update (after 1 s of motion) | real-time factor at 240 Hz '
              '| strips in the exact step | exact step alone, ns per update (ratio) '
              '| 2 threads, ns per update of wall time (speed-up) |',
              '|---|---|---|---|---|---|---|']
@@ -41,6 +41,10 @@ def main():
         lines.append('| %s | %s | %.0f | %.2f | %.1f %% | %s | %s |' % (
             format(int(b['strips']), ','), format(points, ','), ns, 1.0 / (ns * 1e-9 * points * SUBSTEP_RATE),
             100.0 * b.get('exact_share', 0.0), exact_ns, two_ns))
+    # Issue 7's linear scaling: the cost per update at 10,000 strips over that at 100 (target <= 1.5).
+    if 'BM_Step/100' in bench and 'BM_Step/10000' in bench:
+        lines += ['', 'Cost per update at 10,000 strips / at 100: %.2f x.' % (
+            bench['BM_Step/100']['items_per_second'] / bench['BM_Step/10000']['items_per_second'])]
     lines += ['', '| tessellation (default hairstyle and level of detail) | ns per vertex |', '|---|---|']
     for name in ('BM_Tessellate_CachedBasis', 'BM_Tessellate_ForwardDifferencing', 'BM_Tessellate_DeBoor'):
         if name in bench:
