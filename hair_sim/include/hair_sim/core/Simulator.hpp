@@ -21,9 +21,10 @@
 /// gets the reaction constraint (8)-(10) on F. After the angle update, the new end point of every
 /// segment is checked against every inflated body: inside, on a path that entered the body during
 /// the substep (the paper's ray test, in sphere space, with the body's motion), or with the segment
-/// cutting through it, the segment is turned (length kept) by bisection toward the outward normal
-/// at its pivot until none of that holds. So no control point below the roots ends a substep inside
-/// an inflated body.
+/// cutting through it, the segment is turned (length kept) toward the outward normal at its pivot, to
+/// the nearest direction where none of that holds (a bracket on the arc narrowed by the ITP method, every
+/// probe decided by the tests themselves). So no control point below the roots ends a substep inside an
+/// inflated body.
 ///
 /// Springs (paper 4.3b, equation 11): pairs within a strip (neighbouring columns, same row) and
 /// between strips (control points closer than a radius at rest, found through a uniform grid, the
@@ -231,7 +232,8 @@ class Simulator {
   /// band_pairs_ from springs_ and the band's factors (end of buildSprings, setParameters).
   void buildBandPairs();
   void computeSpringForces();
-  /// The valid direction nearest to dir (bisection toward an escape direction) for the bodies.
+  /// The valid direction nearest to dir on the arc toward an escape direction (the ITP method on testMargin,
+  /// each probe decided by valid_all) for the bodies.
   template <typename ValidFor, typename ValidAll>
   Vec3 escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const ValidFor& valid_for,
                     const ValidAll& valid_all, const std::vector<Ellipsoid>& now, bool have_before) const;
