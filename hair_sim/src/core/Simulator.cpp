@@ -928,39 +928,42 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
   }
 }
 
+Vec3 Simulator::endInSphere(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now) const {
+  return q_pivot_[b] + d * (now[b].Sinv() * u);
+}
+
+int Simulator::failedKind(std::size_t b, const Vec3& q_end, bool have_before) const {
+  if (q_end.squaredNorm() - 1.0 <= 1e-12) return 0;
+  if (pivot_inside_[b] || clear_level_ >= 2) return -1;  // a root inside its scalp: only the end counts
+  if (pathEntersUnitSphere(q_pivot_[b], c_pivot_[b], q_end)) return 1;  // the segment cuts through
+  if (have_before && clear_level_ == 0 && pathEntersUnitSphere(q_prev_[b], c_prev_[b], q_end)) return 2;
+  return -1;
+}
+
 bool Simulator::clearOf(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
                         bool have_before) const {
-  if (!is_near_[b]) return true;
-  const Vec3 q_end = q_pivot_[b] + d * (now[b].Sinv() * u);
-  if (q_end.squaredNorm() - 1.0 <= 1e-12) return false;
-  if (pivot_inside_[b] || clear_level_ >= 2) return true;  // a root inside its scalp: only the end counts
-  if (pathEntersUnitSphere(q_pivot_[b], c_pivot_[b], q_end)) return false;  // the segment cuts through
-  if (have_before && clear_level_ == 0 && pathEntersUnitSphere(q_prev_[b], c_prev_[b], q_end)) return false;
-  return true;
+  return !is_near_[b] || failedKind(b, endInSphere(b, d, u, now), have_before) < 0;
 }
 
-bool Simulator::failedTest(double d, const Vec3& u, const std::vector<Ellipsoid>& now, bool have_before,
-                           std::size_t& body, int& kind) const {
-  for (std::size_t b : near_) {
-    const Vec3 q_end = q_pivot_[b] + d * (now[b].Sinv() * u);
-    body = b;
-    kind = 0;
-    if (q_end.squaredNorm() - 1.0 <= 1e-12) return true;
-    if (pivot_inside_[b] || clear_level_ >= 2) continue;
-    kind = 1;
-    if (pathEntersUnitSphere(q_pivot_[b], c_pivot_[b], q_end)) return true;
-    kind = 2;
-    if (have_before && clear_level_ == 0 && pathEntersUnitSphere(q_prev_[b], c_prev_[b], q_end)) return true;
-  }
-  return false;
-}
-
-double Simulator::testMargin(std::size_t b, int kind, double d, const Vec3& u,
-                             const std::vector<Ellipsoid>& now) const {
-  const Vec3 q_end = q_pivot_[b] + d * (now[b].Sinv() * u);
+double Simulator::testMargin(std::size_t b, int kind, const Vec3& q_end) const {
   if (kind == 0) return (q_end.squaredNorm() - 1.0) - 1e-12;
   return kind == 1 ? pathClearance(q_pivot_[b], c_pivot_[b], q_end)
                    : pathClearance(q_prev_[b], c_prev_[b], q_end);
+}
+
+Simulator::EscapeProbe Simulator::probeEscape(double d, const Vec3& u, const std::vector<Ellipsoid>& now,
+                                              bool have_before, std::size_t follow_body,
+                                              int follow_kind) const {
+  EscapeProbe p;
+  for (std::size_t b : near_) {
+    const Vec3 q_end = endInSphere(b, d, u, now);
+    if (b == follow_body && follow_kind >= 0) p.margin = testMargin(b, follow_kind, q_end);
+    if (p.kind < 0) {
+      p.kind = failedKind(b, q_end, have_before);
+      p.body = b;
+    }
+  }
+  return p;
 }
 
 bool Simulator::clearOfAll(double d, const Vec3& u, const std::vector<Ellipsoid>& now,
@@ -974,18 +977,17 @@ Vec3 Simulator::clearBodies(const Vec3& pivot, double d, const Vec3& dir, const 
                             bool have_before, int first_level) {
   // Validity for one body: end outside, segment not cutting through it (pivot outside), and the end's
   // path over the substep, relative to the moving body, not entering it (the paper's ray test).
-  auto validFor = [&](std::size_t b, const Vec3& u) { return clearOf(b, d, u, now, have_before); };
   auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, have_before); };
   clear_level_ = first_level;
   Vec3 result = dir;
   if (!validBodies(dir)) {
     ++collisions_;
-    result = escapeBodies(pivot, d, dir, validFor, validBodies, now, have_before);
+    result = escapeBodies(pivot, d, dir, now, have_before);
     // No direction passes every test (a crevice between bodies moving fast, where every end's path over
     // the substep crosses one): the end outside every body comes first, so the swept test goes, then the
     // segment test (the hard guarantee is on where the points are after the substep).
     for (++clear_level_; clear_level_ <= 2 && !validBodies(result); ++clear_level_)
-      result = escapeBodies(pivot, d, result, validFor, validBodies, now, have_before);
+      result = escapeBodies(pivot, d, result, now, have_before);
   }
   clear_level_ = 0;
   return result;
@@ -993,7 +995,6 @@ Vec3 Simulator::clearBodies(const Vec3& pivot, double d, const Vec3& dir, const 
 
 Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
                                   const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
-  auto validFor = [&](std::size_t b, const Vec3& u) { return clearOf(b, d, u, now, !before.empty()); };
   auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, !before.empty()); };
   const Vec3 result = clearBodies(pivot, d, dir, now, !before.empty());
   // Spring band as a constraint: move the end into [proximity, far] x rest length of each partner
@@ -1059,7 +1060,7 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
     Vec3 p = u;
     if (!project(p)) break;  // every band holds
     if (!validBodies(p)) {
-      p = escapeBodies(pivot, d, p, validFor, validBodies, now, !before.empty());
+      p = escapeBodies(pivot, d, p, now, !before.empty());
       if (!validBodies(p)) break;
     }
     u = p;
@@ -1067,11 +1068,11 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
   return u;
 }
 
-template <typename ValidFor, typename ValidAll>
-Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const ValidFor& validFor,
-                             const ValidAll& validBodies, const std::vector<Ellipsoid>& now,
+Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
                              bool have_before) const {
   const std::size_t nb = now.size();
+  auto validFor = [&](std::size_t b, const Vec3& u) { return clearOf(b, d, u, now, have_before); };
+  auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, have_before); };
   // The valid direction closest to `dir` on the arc dir -> to (`to` valid): a bracket [lo blocked, hi clear]
   // narrowed until it is at most kEscapeTolerance wide (as the chord |hi - lo|), hi returned. The first
   // midpoint is the normalised sum of the ends, or by rotation for an arc near pi long; after it the arc is
@@ -1085,18 +1086,19 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   auto bisect = [&](const Vec3& to) {
     Vec3 lo = dir.normalized();
     Vec3 hi = to.normalized();
-    // (The midpoint of an arc shorter than about 170 degrees is the normalised sum of its ends; a longer
-    // one's by rotation.)
+    // (|lo + hi|^2 > 0.01: an arc shorter than 174 degrees.)
     const Vec3 sum = lo + hi;
     const Vec3 half = sum.squaredNorm() > 0.01
                           ? Vec3(sum.normalized())
                           : Vec3(rotateByVector(0.5 * rotationVectorBetween(lo, hi), lo).normalized());
     (validBodies(half) ? hi : lo) = half;
-    std::size_t body = 0;
-    int kind = 0;
     double width = (hi - lo).norm();
-    if (width > kEscapeTolerance && failedTest(d, lo, now, have_before, body, kind)) {
-      double f_lo = testMargin(body, kind, d, lo, now), f_hi = testMargin(body, kind, d, hi, now);
+    const EscapeProbe at_lo = width > kEscapeTolerance ? probeEscape(d, lo, now, have_before) : EscapeProbe{};
+    if (at_lo.kind >= 0) {  // (lo is blocked: always)
+      std::size_t body = at_lo.body;
+      int kind = at_lo.kind;
+      double f_lo = testMargin(body, kind, endInSphere(body, d, lo, now));
+      double f_hi = testMargin(body, kind, endInSphere(body, d, hi, now));
       const double eps = 0.5 * kEscapeTolerance;
       // The truncation k1 width^2 with k1 = 0.015 / (first width): 6.3-6.6 probes here at 100, 1,000 and
       // 10,000 strips of BM_Step's motion, against 7.8-8.1 with the paper's 0.2 (9.0-10.6 below 0.005).
@@ -1113,13 +1115,17 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
         const double x_t = delta <= std::abs(x_half - x_f) ? x_f + sigma * delta : x_half;
         const double x = std::abs(x_t - x_half) <= r ? x_t : x_half - sigma * r;
         const Vec3 mid = (lo + (x / width) * (hi - lo)).normalized();
-        const double f_mid = testMargin(body, kind, d, mid, now);
-        if (validBodies(mid)) {
-          hi = mid, f_hi = f_mid;
+        // The tests and the followed test's margin from one mapping of mid per body.
+        const EscapeProbe at = probeEscape(d, mid, now, have_before, body, kind);
+        if (at.kind < 0) {
+          hi = mid, f_hi = at.margin;
         } else {
-          lo = mid, f_lo = f_mid;
-          if (f_lo >= 0.0 && failedTest(d, lo, now, have_before, body, kind))
-            f_lo = testMargin(body, kind, d, lo, now), f_hi = testMargin(body, kind, d, hi, now);
+          lo = mid, f_lo = at.margin;
+          if (f_lo >= 0.0) {  // lo passes the test followed so far: follow the one it fails
+            body = at.body, kind = at.kind;
+            f_lo = testMargin(body, kind, endInSphere(body, d, lo, now));
+            f_hi = testMargin(body, kind, endInSphere(body, d, hi, now));
+          }
         }
         width = (hi - lo).norm();
       }

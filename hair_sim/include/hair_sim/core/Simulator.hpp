@@ -37,6 +37,7 @@
 /// proximity_factor x rest length nor spread wider than far_factor x it, unless the bodies (which keep
 /// the last word) forbid every placement: in one simulated hour of the soak, 4 substeps, all under a
 /// nod of pi/2 at 20 Hz.
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -233,10 +234,9 @@ class Simulator {
   void buildBandPairs();
   void computeSpringForces();
   /// The valid direction nearest to dir on the arc toward an escape direction (the ITP method on testMargin,
-  /// each probe decided by valid_all) for the bodies.
-  template <typename ValidFor, typename ValidAll>
-  Vec3 escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const ValidFor& valid_for,
-                    const ValidAll& valid_all, const std::vector<Ellipsoid>& now, bool have_before) const;
+  /// each probe decided by clearOf's tests, prepareBodies first) for the bodies.
+  Vec3 escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
+                    bool have_before) const;
   /// Maps the pivot and the previous end of a segment into the sphere space of every body and keeps
   /// the bodies within its reach (near_); resolveCollisions and the reaction constraint use them.
   void prepareBodies(const Vec3& pivot, double d, const Vec3& previous_end, const std::vector<Ellipsoid>& now,
@@ -249,14 +249,25 @@ class Simulator {
   /// segment not cutting through it, the end's path over the substep not entering it?
   bool clearOf(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
                bool have_before) const;
-  /// The first of clearOf's tests over near_ that direction u fails: its body and kind (0 the end inside, 1
-  /// the segment through, 2 the end's path into it); false when u is clear.
-  bool failedTest(double d, const Vec3& u, const std::vector<Ellipsoid>& now, bool have_before,
-                  std::size_t& body, int& kind) const;
-  /// The margin of that test for direction u: positive where it passes (up to rounding at its boundary),
-  /// smooth and of the first order in u at the boundary, for escapeBodies to interpolate.
-  double testMargin(std::size_t body, int kind, double d, const Vec3& u,
-                    const std::vector<Ellipsoid>& now) const;
+  /// The end of direction u in near body b's sphere space (prepareBodies first).
+  Vec3 endInSphere(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now) const;
+  /// clearOf's tests for near body b on the end q_end (endInSphere): -1 when it passes them all, else the
+  /// first it fails: 0 the end inside, 1 the segment through the body, 2 the end's path into it.
+  int failedKind(std::size_t b, const Vec3& q_end, bool have_before) const;
+  /// The margin of test `kind` of body b for the end q_end: positive where it passes (up to rounding at its
+  /// boundary), smooth and of the first order in the direction at the boundary, for escapeBodies to
+  /// interpolate.
+  double testMargin(std::size_t b, int kind, const Vec3& q_end) const;
+  /// One probe of escapeBodies: the first of clearOf's tests over near_ that the direction fails (kind -1:
+  /// clear, as clearOfAll), and the margin of the test it follows.
+  struct EscapeProbe {
+    std::size_t body = 0;
+    int kind = -1;
+    double margin = std::numeric_limits<double>::quiet_NaN();
+  };
+  /// Maps u into each near body's sphere space once for both.
+  EscapeProbe probeEscape(double d, const Vec3& u, const std::vector<Ellipsoid>& now, bool have_before,
+                          std::size_t follow_body = 0, int follow_kind = -1) const;
   /// clearOf for every near body.
   bool clearOfAll(double d, const Vec3& u, const std::vector<Ellipsoid>& now, bool have_before) const;
   /// The bodies' part of resolveCollisions (prepareBodies first): dir when the segment is clear of every
