@@ -3,6 +3,7 @@
 /// of 2 x 5 control points on the default config's head, the head nodding and turning in a steady wind.
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "hair_sim/core/Simulator.hpp"
 #include "hair_sim/core/model/HairstyleGenerator.hpp"
@@ -39,6 +40,34 @@ inline StepInputs benchInputs(const SimConfig& config, const Iso3& rest, HeadMot
     in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
   return in;
 }
+
+/// A Simulator of `strips` benchmark strips on `config` going through the motion of benchInputs, substep
+/// after substep: next() gives the inputs of the next substep (and keeps its head pose and body frames),
+/// step() takes it. The construction runs `warmup` substeps.
+struct MotionRun {
+  SimConfig config;
+  Iso3 rest = benchRestPose();
+  Simulator sim;
+  HeadMotionEstimator head;
+  long n = 0;                     ///< substeps so far
+  Iso3 pose = Iso3::Identity();   ///< the head pose of substep n
+  std::vector<Iso3> body_frames;  ///< the bodies' frames of substep n
+
+  MotionRun(const SimConfig& c, int strips, Simulator::StepPath path, int threads, long warmup)
+      : config(c), sim(benchHairstyle(c, strips), c.physics, c.bodies) {
+    sim.setStepPath(path);
+    sim.setThreads(threads);
+    head.reset(rest);
+    while (n < warmup) step();
+  }
+  StepInputs next() {
+    ++n;
+    StepInputs in = benchInputs(config, rest, head, n, config.physics.substep, pose);
+    body_frames = in.body_frames;
+    return in;
+  }
+  void step() { sim.step(next()); }
+};
 
 }  // namespace bench
 }  // namespace hair_sim

@@ -19,7 +19,6 @@ namespace {
 
 using namespace hair_sim;
 using hair_sim::bench::benchHairstyle;
-using hair_sim::bench::benchInputs;
 
 /// Simulator set-up (chains, rest compensation, spring pairs through the grid); items = strips.
 void BM_Setup(benchmark::State& state) {
@@ -40,48 +39,27 @@ BENCHMARK(BM_Setup)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMilliseco
 /// timed in the same phase of the motion.
 constexpr long kWarmupSubsteps = 240;
 
-/// A simulator of BM_Step's hairstyle, warmed up by kWarmupSubsteps of its motion once per (strips, path,
+/// BM_Step's simulator of `strips` strips, warmed up by kWarmupSubsteps of its motion once per (strips, path,
 /// threads) and kept for the benchmark's later runs (Google Benchmark calls a benchmark several times per
 /// repetition), which go on with the motion.
-struct WarmSimulator {
-  SimConfig config;
-  Iso3 rest;
-  Simulator sim;
-  HeadMotionEstimator head;
-  long n = 0;  // substeps so far
-  WarmSimulator(const SimConfig& c, int strips, Simulator::StepPath path, int threads)
-      : config(c), rest(bench::benchRestPose()), sim(benchHairstyle(c, strips), c.physics, c.bodies) {
-    sim.setStepPath(path);
-    sim.setThreads(threads);
-    head.reset(rest);
-    Iso3 pose;
-    while (n < kWarmupSubsteps) step(pose);
-  }
-  void step(Iso3& pose) {
-    ++n;
-    sim.step(benchInputs(config, rest, head, n, config.physics.substep, pose));
-  }
-};
-
-WarmSimulator& warmSimulator(int strips, Simulator::StepPath path, int threads) {
-  static std::map<std::tuple<int, int, int>, std::unique_ptr<WarmSimulator>> cache;
-  std::unique_ptr<WarmSimulator>& w = cache[std::make_tuple(strips, static_cast<int>(path), threads)];
+bench::MotionRun& warmSimulator(int strips, Simulator::StepPath path, int threads) {
+  static std::map<std::tuple<int, int, int>, std::unique_ptr<bench::MotionRun>> cache;
+  std::unique_ptr<bench::MotionRun>& w = cache[std::make_tuple(strips, static_cast<int>(path), threads)];
   if (!w) {
     const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
-    w = std::make_unique<WarmSimulator>(config, strips, path, threads);
+    w = std::make_unique<bench::MotionRun>(config, strips, path, threads, kWarmupSubsteps);
   }
   return *w;
 }
 
 void runStep(benchmark::State& state, Simulator::StepPath path, int threads = 1) {
-  WarmSimulator& w = warmSimulator(static_cast<int>(state.range(0)), path, threads);
+  bench::MotionRun& w = warmSimulator(static_cast<int>(state.range(0)), path, threads);
   Simulator& sim = w.sim;
   long n = 0;
   double exact = 0.0;
-  Iso3 pose;
   for (auto _ : state) {
     ++n;
-    w.step(pose);
+    w.step();
     exact += sim.exactStripCount();
   }
   state.SetItemsProcessed(state.iterations() * sim.controlPointCount());
@@ -111,24 +89,15 @@ BENCHMARK(BM_Step2Threads)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMi
 /// out of the 5 bodies, the look); items = vertices; threads: HairMeshBuilder::setThreads (wall time).
 void BM_MeshBuild(benchmark::State& state) {
   const SimConfig config = loadSimConfig(std::string(HAIR_SIM_REPO_ROOT) + "/config/hair_sim.yaml");
-  const Iso3 rest = bench::benchRestPose();
-  const Hairstyle style = benchHairstyle(config, static_cast<int>(state.range(0)));
-  Simulator sim(style, config.physics, config.bodies);
-  HeadMotionEstimator head;
-  head.reset(rest);
-  const double dt = config.physics.substep;
-  Iso3 pose;
-  std::vector<Iso3> frames;
-  for (long n = 1; n <= 240; ++n) {
-    const StepInputs in = benchInputs(config, rest, head, n, dt, pose);
-    frames = in.body_frames;
-    sim.step(in);
-  }
+  const bench::MotionRun run(config, static_cast<int>(state.range(0)), Simulator::StepPath::Lanes, 1,
+                             kWarmupSubsteps);
+  const Simulator& sim = run.sim;
+  const Iso3& pose = run.pose;
   std::vector<Vec3> points;
   sim.positionsWorld(pose, points);
   std::vector<Ellipsoid> bodies;
   for (std::size_t b = 0; b < config.bodies.size(); ++b)
-    bodies.push_back(config.bodies[b].shape.transformed(frames[b]));
+    bodies.push_back(config.bodies[b].shape.transformed(run.body_frames[b]));
   HairMeshBuilder builder(sim.hairstyle(), HairMeshOptions{});
   builder.setThreads(static_cast<int>(state.range(1)));
   const Ellipsoid scalp = sim.hairstyle().scalp.transformed(pose);

@@ -87,21 +87,11 @@ int main(int argc, char** argv) {
   }
   try {
     const SimConfig config = loadSimConfig(config_file);
-    const Iso3 rest = bench::benchRestPose();
-    Simulator sim(bench::benchHairstyle(config, static_cast<int>(strips)), config.physics, config.bodies);
-    sim.setStepPath(path);
-    sim.setThreads(static_cast<int>(threads));
-    HeadMotionEstimator head;
-    head.reset(rest);
-    const double dt = config.physics.substep;
+    bench::MotionRun run(config, static_cast<int>(strips), path, static_cast<int>(threads), warmup);
+    Simulator& sim = run.sim;
     double exact = 0.0, seconds = 0.0;
-    Iso3 pose;
-    for (long n = 1; n <= warmup + substeps; ++n) {
-      const StepInputs in = bench::benchInputs(config, rest, head, n, dt, pose);
-      if (n <= warmup) {
-        sim.step(in);
-        continue;
-      }
+    for (long k = 0; k < substeps; ++k) {
+      const StepInputs in = run.next();
       const auto t0 = std::chrono::steady_clock::now();
       step_profile_measured(sim, in);
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
