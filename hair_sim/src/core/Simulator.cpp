@@ -1083,7 +1083,7 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   // bisection's. Each probe is put on its side by the tests themselves (validBodies), so hi is always clear;
   // where lo passes the test followed so far, the test it fails is followed instead. 7.3-7.6 probes where the
   // bisection took 35.6 (docs/benchmarks.md).
-  auto bisect = [&](const Vec3& to) {
+  auto nearestClear = [&](const Vec3& to) {
     Vec3 lo = dir.normalized();
     Vec3 hi = to.normalized();
     // (|lo + hi|^2 > 0.01: an arc shorter than 174 degrees.)
@@ -1150,7 +1150,7 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   if (count == 0) return dir;
   if (count > 1 && sum.norm() > 1e-9) cand[count++] = sum.normalized();
   for (int c = 0; c < count; ++c)
-    if (validBodies(cand[c])) return bisect(cand[c]);
+    if (validBodies(cand[c])) return nearestClear(cand[c]);
   // No single escape clears every body (a pinch between overlapping bodies): search the sphere of
   // directions around the pivot for a valid one, else the one with the smallest worst penetration.
   const Vec3 base = cand[count - 1];
@@ -1163,7 +1163,7 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
     for (int j = 0; j < around; ++j) {
       const double az = 2.0 * kPi * j / around;
       const Vec3 u = std::cos(polar) * base + std::sin(polar) * (std::cos(az) * t1 + std::sin(az) * t2);
-      if (validBodies(u)) return bisect(u);
+      if (validBodies(u)) return nearestClear(u);
       double worst = 0.0;
       for (std::size_t b = 0; b < nb; ++b)
         worst = std::max(worst, std::max(0.0, -now[b].implicitValue(pivot + d * u)));
