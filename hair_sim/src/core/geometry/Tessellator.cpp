@@ -550,6 +550,9 @@ void cachedColumnPairs(const double* curve, const double* curve_dv, int stride, 
 
 #if defined(HAIR_SIM_AVX2)
 
+/// The fewest vertex columns that go through cachedRowQuads together (fewer: cachedColumnQuads each).
+constexpr int kMinRowLanes = 2;
+
 /// Four 3D vectors as x, y, z lane quads (lane l: sample iv + l).
 struct Quad3 {
   __m256d x;
@@ -784,6 +787,140 @@ HAIR_SIM_AVX2_TARGET void cachedColumnQuads(const double* curve, const double* c
                hair_length, previous_du, current_du, previous_dv, current_dv);
     normalizeColumnFrom(mesh, iu, j);
     return;
+  }
+}
+
+/// CachedBasis stage 2 (AVX2), vertex columns in lanes: `count` (2-4) consecutive vertex columns from iu0
+/// whose across samples share their first control column, one row (v sample) per step. Each lane walks its
+/// own column's length with a vector add: the same sums in the same order as cachedColumnQuads, without the
+/// prefix sum across lanes, and a row's vertices are contiguous in the mesh. A lane whose walk crosses the
+/// hair length has its column finished by clipColumn after the last row (over the rows the loop went on
+/// writing).
+template <int W>
+HAIR_SIM_AVX2_TARGET void cachedRowQuads(const double* curve, const double* curve_dv, int stride,
+                                         const double* const* weights, const double* const* derivatives,
+                                         int iu0, int count, double hair_length, double inverse_length,
+                                         StripMesh& mesh) {
+  const int n_u = mesh.n_u;
+  const int n_v = mesh.n_v;
+  const std::size_t s = static_cast<std::size_t>(stride);
+  double* positions = mesh.positions.data()->data();
+  double* normals = mesh.normals.data()->data();
+  double* tangents = mesh.tangents.data()->data();
+  float* v_param = mesh.v_param.data();
+  __m256d w[W];
+  __m256d dw[W];
+#pragma GCC unroll 4
+  for (int b = 0; b < W; ++b) {
+    alignas(32) double lane_w[4];
+    alignas(32) double lane_dw[4];
+    for (int l = 0; l < 4; ++l) {  // an idle lane repeats the last column
+      lane_w[l] = weights[std::min(l, count - 1)][b];
+      lane_dw[l] = derivatives[std::min(l, count - 1)][b];
+    }
+    w[b] = _mm256_load_pd(lane_w);
+    dw[b] = _mm256_load_pd(lane_dw);
+  }
+  const __m256d limit = _mm256_set1_pd(hair_length);
+  const __m256d inverse = _mm256_set1_pd(inverse_length);
+  const int real = (1 << count) - 1;
+  int crossed = 0;
+  // Per crossed lane: the row, the walk before it, the segment, and the previous and current vertex.
+  int crossing_row[4] = {0, 0, 0, 0};
+  double crossing_length[4];
+  double crossing_segment[4];
+  double crossing_previous[4][3];
+  double crossing_step[4][3];
+  double crossing_du[4][3];
+  double crossing_dv[4][3];
+  __m256d length = _mm256_setzero_pd();
+  Quad3 last{};
+  for (int iv = 0; iv < n_v; ++iv) {
+    Quad3 p;
+    Quad3 du;
+    Quad3 dv;
+    {
+      const double* c = curve + iv;
+      const double* d = curve_dv + iv;
+      const __m256d cx = _mm256_broadcast_sd(c);
+      const __m256d cy = _mm256_broadcast_sd(c + s);
+      const __m256d cz = _mm256_broadcast_sd(c + 2 * s);
+      p = {w[0] * cx, w[0] * cy, w[0] * cz};
+      du = {dw[0] * cx, dw[0] * cy, dw[0] * cz};
+      dv = {w[0] * _mm256_broadcast_sd(d), w[0] * _mm256_broadcast_sd(d + s),
+            w[0] * _mm256_broadcast_sd(d + 2 * s)};
+    }
+#pragma GCC unroll 4
+    for (int b = 1; b < W; ++b) {
+      const double* c = curve + 3 * b * s + iv;
+      const double* d = curve_dv + 3 * b * s + iv;
+      const __m256d cx = _mm256_broadcast_sd(c);
+      const __m256d cy = _mm256_broadcast_sd(c + s);
+      const __m256d cz = _mm256_broadcast_sd(c + 2 * s);
+      p = plus(p, Quad3{w[b] * cx, w[b] * cy, w[b] * cz});
+      du = plus(du, Quad3{dw[b] * cx, dw[b] * cy, dw[b] * cz});
+      dv = plus(dv, Quad3{w[b] * _mm256_broadcast_sd(d), w[b] * _mm256_broadcast_sd(d + s),
+                          w[b] * _mm256_broadcast_sd(d + 2 * s)});
+    }
+    if (iv == 0) {  // the root has no previous sample: a zero first segment
+      last = p;
+    }
+    const Quad3 step{p.x - last.x, p.y - last.y, p.z - last.z};
+    const __m256d segment = _mm256_sqrt_pd(dot4(step, step));
+    const __m256d walked = length + segment;
+    const int over = _mm256_movemask_pd(_mm256_cmp_pd(walked, limit, _CMP_GT_OQ)) & real & ~crossed;
+    if (over != 0) {  // rare: once per column at most
+      alignas(32) double lanes[15][4];
+      const __m256d keep[15] = {last.x, last.y, last.z, step.x, step.y,  step.z, du.x,  du.y,
+                                du.z,   dv.x,   dv.y,   dv.z,   segment, length, walked};
+      for (int k = 0; k < 15; ++k) {
+        _mm256_store_pd(lanes[k], keep[k]);
+      }
+      for (int l = 0; l < count; ++l) {
+        if (!(over & (1 << l))) {
+          continue;
+        }
+        crossing_row[l] = iv;
+        crossing_segment[l] = lanes[12][l];
+        crossing_length[l] = lanes[13][l];
+        for (int k = 0; k < 3; ++k) {
+          crossing_previous[l][k] = lanes[k][l];
+          crossing_step[l][k] = lanes[3 + k][l];
+          crossing_du[l][k] = lanes[6 + k][l];
+          crossing_dv[l][k] = lanes[9 + k][l];
+        }
+      }
+      crossed |= over;
+    }
+    const std::size_t a = static_cast<std::size_t>(iv) * n_u + iu0;
+    storeQuadLanes(p, positions + 3 * a, 3, count);
+    Quad3 n;
+    Quad3 t;
+    if (unitFrames4(du, dv, n, t)) {
+      storeQuadLanes(n, normals + 3 * a, 3, count);
+      storeQuadLanes(t, tangents + 3 * a, 3, count);
+    } else {
+      storeQuadLanes(du, normals + 3 * a, 3, count);
+      storeQuadLanes(dv, tangents + 3 * a, 3, count);
+      for (int l = 0; l < count; ++l) {
+        normalizeFrame(normals + 3 * (a + l), tangents + 3 * (a + l));
+      }
+    }
+    storeFloatLanes(_mm256_cvtpd_ps(walked * inverse), v_param + a, 1, count);
+    length = walked;
+    last = p;
+  }
+  for (int l = 0; l < count; ++l) {
+    if (!(crossed & (1 << l))) {
+      continue;
+    }
+    const int j = crossing_row[l];  // j > 0: the root has a zero segment
+    double previous_du[3];
+    double previous_dv[3];
+    derivativesAt(curve, curve_dv, s, weights[l], derivatives[l], W, j - 1, previous_du, previous_dv);
+    clipColumn(mesh, iu0 + l, j, crossing_previous[l], crossing_step[l], crossing_segment[l],
+               crossing_length[l], hair_length, previous_du, crossing_du[l], previous_dv, crossing_dv[l]);
+    normalizeColumnFrom(mesh, iu0 + l, j);
   }
 }
 #endif
@@ -1366,11 +1503,41 @@ void Tessellator::tessellateCachedBasis(const Vec3* points, int columns, int row
                             curve_dv_.data());
         break;
     }
-    for (int iu = 0; iu < n_u; ++iu) {
+    for (int iu = 0; iu < n_u;) {
       const BasisSample& sample = across.samples[static_cast<std::size_t>(iu)];
       const std::size_t offset = static_cast<std::size_t>(3 * sample.first) * stride;
       const double* curve = curve_.data() + offset;
       const double* curve_dv = curve_dv_.data() + offset;
+      // Up to four vertex columns on the same control columns go through the rows kernel together.
+      int count = 1;
+      while (count < 4 && iu + count < n_u &&
+             across.samples[static_cast<std::size_t>(iu + count)].first == sample.first) {
+        ++count;
+      }
+      if (count >= kMinRowLanes) {
+        const double* weights[4];
+        const double* derivatives[4];
+        for (int l = 0; l < count; ++l) {
+          weights[l] = across.samples[static_cast<std::size_t>(iu + l)].weight;
+          derivatives[l] = across.samples[static_cast<std::size_t>(iu + l)].derivative;
+        }
+        switch (across.width) {
+          case 2:
+            cachedRowQuads<2>(curve, curve_dv, stride, weights, derivatives, iu, count, hair_length,
+                              inverse_length, mesh);
+            break;
+          case 3:
+            cachedRowQuads<3>(curve, curve_dv, stride, weights, derivatives, iu, count, hair_length,
+                              inverse_length, mesh);
+            break;
+          default:
+            cachedRowQuads<4>(curve, curve_dv, stride, weights, derivatives, iu, count, hair_length,
+                              inverse_length, mesh);
+            break;
+        }
+        iu += count;
+        continue;
+      }
       switch (across.width) {
         case 2:
           cachedColumnQuads<2>(curve, curve_dv, stride, sample.weight, sample.derivative, iu, hair_length,
@@ -1385,6 +1552,7 @@ void Tessellator::tessellateCachedBasis(const Vec3* points, int columns, int row
                                inverse_length, mesh);
           break;
       }
+      ++iu;
     }
     return;
   }
