@@ -358,6 +358,18 @@ void uniformBasis(int degree, double t, double value[4], double derivative[4]) {
   }
 }
 
+/// The mesh's vertex arrays as plain pointers (the kernels' outputs).
+struct MeshArrays {
+  double* positions;
+  double* normals;
+  double* tangents;
+  float* v_param;
+};
+inline MeshArrays meshArrays(StripMesh& mesh) {
+  return {mesh.positions.data()->data(), mesh.normals.data()->data(), mesh.tangents.data()->data(),
+          mesh.v_param.data()};
+}
+
 /// Clips a vertex column at the hair length inside the segment prev -> prev + step (walked length so far
 /// `length` <= hair_length < length + |step|): the vertex moves back along the segment to the exact length,
 /// its derivatives are interpolated likewise, and every later vertex of the column repeats it.
@@ -452,10 +464,7 @@ void cachedColumnPairs(const double* curve, const double* curve_dv, int stride, 
   const int n_u = mesh.n_u;
   const int n_v = mesh.n_v;
   const std::size_t s = static_cast<std::size_t>(stride);
-  double* positions = mesh.positions.data()->data();
-  double* normals = mesh.normals.data()->data();
-  double* tangents = mesh.tangents.data()->data();
-  float* v_param = mesh.v_param.data();
+  const auto [positions, normals, tangents, v_param] = meshArrays(mesh);
   __m128d w[W];
   __m128d dw[W];
 #pragma GCC unroll 4
@@ -674,10 +683,7 @@ HAIR_SIM_AVX2_TARGET void cachedColumnQuads(const double* curve, const double* c
   const int n_v = mesh.n_v;
   const std::size_t s = static_cast<std::size_t>(stride);
   const std::size_t vertex_stride = 3 * static_cast<std::size_t>(n_u);
-  double* positions = mesh.positions.data()->data();
-  double* normals = mesh.normals.data()->data();
-  double* tangents = mesh.tangents.data()->data();
-  float* v_param = mesh.v_param.data();
+  const auto [positions, normals, tangents, v_param] = meshArrays(mesh);
   __m256d w[W];
   __m256d dw[W];
 #pragma GCC unroll 4
@@ -804,10 +810,7 @@ HAIR_SIM_AVX2_TARGET void cachedRowQuads(const double* curve, const double* curv
   const int n_u = mesh.n_u;
   const int n_v = mesh.n_v;
   const std::size_t s = static_cast<std::size_t>(stride);
-  double* positions = mesh.positions.data()->data();
-  double* normals = mesh.normals.data()->data();
-  double* tangents = mesh.tangents.data()->data();
-  float* v_param = mesh.v_param.data();
+  const auto [positions, normals, tangents, v_param] = meshArrays(mesh);
   __m256d w[W];
   __m256d dw[W];
 #pragma GCC unroll 4
@@ -969,10 +972,7 @@ void cachedColumn(const double* curve, const double* curve_dv, int row_stride, c
   }
   const int n_u = mesh.n_u;
   const int n_v = mesh.n_v;
-  double* positions = mesh.positions.data()->data();
-  double* derivatives_u = mesh.normals.data()->data();
-  double* derivatives_v = mesh.tangents.data()->data();
-  float* v_param = mesh.v_param.data();
+  const auto [positions, derivatives_u, derivatives_v, v_param] = meshArrays(mesh);  // raw derivatives
   double length = 0.0;
   double previous[3] = {0.0, 0.0, 0.0};
   for (int iv = 0; iv < n_v; ++iv) {
