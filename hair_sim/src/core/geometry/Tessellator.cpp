@@ -421,6 +421,21 @@ void normalizeColumnFrom(StripMesh& mesh, int iu, int iv) {
   }
 }
 
+/// A CachedBasis column that reaches the hair length in its row j > 0 (walked `length` before it, `segment`
+/// from `previous` by `step`): the raw derivatives of row j - 1 from the column curves (derivativesAt), then
+/// clipColumn and the unit frames of the rows from j (normalizeColumnFrom).
+void clipCachedColumn(StripMesh& mesh, int iu, int j, const double* curve, const double* curve_dv,
+                      std::size_t stride, const double* weight, const double* derivative_weight, int width,
+                      const double* previous, const double* step, double segment, double length,
+                      double hair_length, const double* current_du, const double* current_dv) {
+  double previous_du[3];
+  double previous_dv[3];
+  derivativesAt(curve, curve_dv, stride, weight, derivative_weight, width, j - 1, previous_du, previous_dv);
+  clipColumn(mesh, iu, j, previous, step, segment, length, hair_length, previous_du, current_du, previous_dv,
+             current_dv);
+  normalizeColumnFrom(mesh, iu, j);
+}
+
 /// CachedBasis stage 1 (SSE2): the curves of all control columns and their d/dv, two v samples per step on a
 /// window of K control rows, stored per coordinate q = column * 3 + k as arrays over the samples:
 /// curve[q * stride + iv]. broadcast holds every control coordinate twice (row r at r * 6 * columns).
@@ -511,12 +526,10 @@ void cachedColumnPairs(const double* curve, const double* curve_dv, int stride, 
       lane(step, 0, step0);
       lane(step, 1, step1);
       if (l0 > hair_length) {  // iv > 0 here: the root has l0 = 0
-        double previous_p[3], previous_du[3], previous_dv[3];
+        double previous_p[3];
         lane(last, 1, previous_p);
-        derivativesAt(curve, curve_dv, s, weight, derivative_weight, W, iv - 1, previous_du, previous_dv);
-        clipColumn(mesh, iu, iv, previous_p, step0, s0, length, hair_length, previous_du, du0, previous_dv,
-                   dv0);
-        normalizeColumnFrom(mesh, iu, iv);
+        clipCachedColumn(mesh, iu, iv, curve, curve_dv, s, weight, derivative_weight, W, previous_p, step0,
+                         s0, length, hair_length, du0, dv0);
         return;
       }
       for (int k = 0; k < 3; ++k) {
@@ -559,8 +572,10 @@ void cachedColumnPairs(const double* curve, const double* curve_dv, int stride, 
 
 #if defined(HAIR_SIM_AVX2)
 
-/// The fewest vertex columns that go through cachedRowQuads together (fewer: cachedColumnQuads each).
-constexpr int kMinRowLanes = 2;
+/// The fewest vertex columns that go through cachedRowQuads together (fewer: cachedColumnQuads each). With
+/// two, half the lanes idle and the rows kernel took 1.16 x the time of the columns kernel (2 x 5 strips at
+/// level 1 x 4); with three 0.88 x, with four 0.75 x (4 x 5 strips at 1 x 4).
+constexpr int kMinRowLanes = 3;
 
 /// Four 3D vectors as x, y, z lane quads (lane l: sample iv + l).
 struct Quad3 {
@@ -780,28 +795,27 @@ HAIR_SIM_AVX2_TARGET void cachedColumnQuads(const double* curve, const double* c
       v_param[index] = static_cast<float>(walked[l] * inverse_length);
     }
     const int j = iv + crossing;  // j > 0: the root has a zero segment
-    double previous[3], previous_du[3], previous_dv[3], current_du[3], current_dv[3], step[3];
+    double previous[3], current_du[3], current_dv[3], step[3];
     const double* before = positions + 3 * (a + static_cast<std::size_t>(crossing) * n_u) - vertex_stride;
-    derivativesAt(curve, curve_dv, s, weight, derivative_weight, W, j - 1, previous_du, previous_dv);
     for (int k = 0; k < 3; ++k) {
       previous[k] = before[k];
       current_du[k] = lanes[3 + k][crossing];
       current_dv[k] = lanes[6 + k][crossing];
       step[k] = lanes[k][crossing] - previous[k];
     }
-    clipColumn(mesh, iu, j, previous, step, segment[crossing], crossing == 0 ? length : walked[crossing - 1],
-               hair_length, previous_du, current_du, previous_dv, current_dv);
-    normalizeColumnFrom(mesh, iu, j);
+    clipCachedColumn(mesh, iu, j, curve, curve_dv, s, weight, derivative_weight, W, previous, step,
+                     segment[crossing], crossing == 0 ? length : walked[crossing - 1], hair_length,
+                     current_du, current_dv);
     return;
   }
 }
 
-/// CachedBasis stage 2 (AVX2), vertex columns in lanes: `count` (2-4) consecutive vertex columns from iu0
-/// whose across samples share their first control column, one row (v sample) per step. Each lane walks its
-/// own column's length with a vector add: the same sums in the same order as cachedColumnQuads, without the
-/// prefix sum across lanes, and a row's vertices are contiguous in the mesh. A lane whose walk crosses the
-/// hair length has its column finished by clipColumn after the last row (over the rows the loop went on
-/// writing).
+/// CachedBasis stage 2 (AVX2), vertex columns in lanes: `count` (kMinRowLanes-4) consecutive vertex columns
+/// from iu0 whose across samples share their first control column, one row (v sample) per step. Each lane
+/// walks its own column's length with a vector add: the same sums in the same order as cachedColumnQuads,
+/// without the prefix sum across lanes, and a row's vertices are contiguous in the mesh. A lane whose walk
+/// crosses the hair length has its column finished by clipColumn after the last row (over the rows the loop
+/// went on writing).
 template <int W>
 HAIR_SIM_AVX2_TARGET void cachedRowQuads(const double* curve, const double* curve_dv, int stride,
                                          const double* const* weights, const double* const* derivatives,
@@ -828,7 +842,8 @@ HAIR_SIM_AVX2_TARGET void cachedRowQuads(const double* curve, const double* curv
   const __m256d inverse = _mm256_set1_pd(inverse_length);
   const int real = (1 << count) - 1;
   int crossed = 0;
-  // Per crossed lane: the row, the walk before it, the segment, and the previous and current vertex.
+  // Per crossed lane: the row, the walk before it, the segment, the previous vertex, the step and the raw
+  // derivatives.
   int crossing_row[4] = {0, 0, 0, 0};
   double crossing_length[4];
   double crossing_segment[4];
@@ -873,24 +888,22 @@ HAIR_SIM_AVX2_TARGET void cachedRowQuads(const double* curve, const double* curv
     const __m256d walked = length + segment;
     const int over = _mm256_movemask_pd(_mm256_cmp_pd(walked, limit, _CMP_GT_OQ)) & real & ~crossed;
     if (over != 0) {  // rare: once per column at most
-      alignas(32) double lanes[15][4];
-      const __m256d keep[15] = {last.x, last.y, last.z, step.x, step.y,  step.z, du.x,  du.y,
-                                du.z,   dv.x,   dv.y,   dv.z,   segment, length, walked};
-      for (int k = 0; k < 15; ++k) {
-        _mm256_store_pd(lanes[k], keep[k]);
-      }
       for (int l = 0; l < count; ++l) {
         if (!(over & (1 << l))) {
           continue;
         }
         crossing_row[l] = iv;
-        crossing_segment[l] = lanes[12][l];
-        crossing_length[l] = lanes[13][l];
+        crossing_segment[l] = segment[l];
+        crossing_length[l] = length[l];
+        const double previous[3] = {last.x[l], last.y[l], last.z[l]};
+        const double lane_step[3] = {step.x[l], step.y[l], step.z[l]};
+        const double lane_du[3] = {du.x[l], du.y[l], du.z[l]};
+        const double lane_dv[3] = {dv.x[l], dv.y[l], dv.z[l]};
         for (int k = 0; k < 3; ++k) {
-          crossing_previous[l][k] = lanes[k][l];
-          crossing_step[l][k] = lanes[3 + k][l];
-          crossing_du[l][k] = lanes[6 + k][l];
-          crossing_dv[l][k] = lanes[9 + k][l];
+          crossing_previous[l][k] = previous[k];
+          crossing_step[l][k] = lane_step[k];
+          crossing_du[l][k] = lane_du[k];
+          crossing_dv[l][k] = lane_dv[k];
         }
       }
       crossed |= over;
@@ -917,13 +930,10 @@ HAIR_SIM_AVX2_TARGET void cachedRowQuads(const double* curve, const double* curv
     if (!(crossed & (1 << l))) {
       continue;
     }
-    const int j = crossing_row[l];  // j > 0: the root has a zero segment
-    double previous_du[3];
-    double previous_dv[3];
-    derivativesAt(curve, curve_dv, s, weights[l], derivatives[l], W, j - 1, previous_du, previous_dv);
-    clipColumn(mesh, iu0 + l, j, crossing_previous[l], crossing_step[l], crossing_segment[l],
-               crossing_length[l], hair_length, previous_du, crossing_du[l], previous_dv, crossing_dv[l]);
-    normalizeColumnFrom(mesh, iu0 + l, j);
+    // crossing_row[l] > 0: the root has a zero segment.
+    clipCachedColumn(mesh, iu0 + l, crossing_row[l], curve, curve_dv, s, weights[l], derivatives[l], W,
+                     crossing_previous[l], crossing_step[l], crossing_segment[l], crossing_length[l],
+                     hair_length, crossing_du[l], crossing_dv[l]);
   }
 }
 #endif
