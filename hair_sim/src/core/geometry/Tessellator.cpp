@@ -1518,7 +1518,7 @@ void Tessellator::tessellateCachedBasis(const Vec3* points, int columns, int row
       const std::size_t offset = static_cast<std::size_t>(3 * sample.first) * stride;
       const double* curve = curve_.data() + offset;
       const double* curve_dv = curve_dv_.data() + offset;
-      // Up to four vertex columns on the same control columns go through the rows kernel together.
+      // Three or four vertex columns on the same control columns go through the rows kernel together.
       int count = 1;
       while (count < 4 && iu + count < n_u &&
              across.samples[static_cast<std::size_t>(iu + count)].first == sample.first) {

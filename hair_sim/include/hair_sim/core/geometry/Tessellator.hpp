@@ -49,7 +49,7 @@ enum class TessellationMethod {
   /// detail are tabulated once per strip size, with the phantom points folded in, so every vertex is a fixed
   /// small linear combination of control points. Separable: the control columns' curves (and d/dv) at all
   /// v samples first, then (degree + 1) of them are combined per vertex. Exact (no accumulated error).
-  /// SIMD: AVX2 (chosen at run time: up to four vertex columns in lanes, one row per step, where they share
+  /// SIMD: AVX2 (chosen at run time: three or four vertex columns in lanes, one row per step, where they share
   /// their control columns; else four v samples of a column) or SSE2 kernels (two v samples at once);
   /// bit-identical to each other.
   CachedBasis,
