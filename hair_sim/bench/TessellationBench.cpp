@@ -55,18 +55,27 @@ std::vector<SyntheticStrip> makeHairstyle() {
   return strips;
 }
 
-void runTessellation(benchmark::State& state, TessellationMethod method, LevelOfDetail level = {}) {
+/// The hairstyle in one call (the batch form of tessellate, as HairMeshBuilder calls it), or with
+/// per_strip one call per strip.
+void runTessellation(benchmark::State& state, TessellationMethod method, LevelOfDetail level = {},
+                     bool per_strip = false) {
   const std::vector<SyntheticStrip> strips = makeHairstyle();
   Tessellator tessellator(level, method);
   std::vector<StripMesh> meshes(strips.size());
+  std::vector<hair_sim::StripInput> inputs(strips.size());
   std::int64_t vertices = 0;
   for (std::size_t i = 0; i < strips.size(); ++i) {  // warm caches and mesh storage
     tessellator.tessellate(strips[i].points, kColumns, kRows, strips[i].hair_length, meshes[i]);
     vertices += meshes[i].vertexCount();
+    inputs[i] = {strips[i].points.data(), kColumns, kRows, strips[i].hair_length};
   }
   for (auto _ : state) {
-    for (std::size_t i = 0; i < strips.size(); ++i) {
-      tessellator.tessellate(strips[i].points.data(), kColumns, kRows, strips[i].hair_length, meshes[i]);
+    if (per_strip) {
+      for (std::size_t i = 0; i < strips.size(); ++i) {
+        tessellator.tessellate(strips[i].points.data(), kColumns, kRows, strips[i].hair_length, meshes[i]);
+      }
+    } else {
+      tessellator.tessellate(inputs.data(), inputs.size(), meshes.data());
     }
     benchmark::DoNotOptimize(meshes.data());
     benchmark::ClobberMemory();
@@ -82,6 +91,10 @@ void BM_Tessellate_DeBoor(benchmark::State& state) { runTessellation(state, Tess
 void BM_Tessellate_CachedBasis(benchmark::State& state) {
   runTessellation(state, TessellationMethod::CachedBasis);
 }
+/// CachedBasis one strip per call (no strips in lanes).
+void BM_Tessellate_CachedBasisPerStrip(benchmark::State& state) {
+  runTessellation(state, TessellationMethod::CachedBasis, {}, true);
+}
 
 /// CachedBasis at samples_along = the argument (the default level of detail has 4): the cost per vertex of
 /// longer columns, where the work per strip and per column is shared by more vertices.
@@ -94,6 +107,7 @@ void BM_Tessellate_CachedBasisAlong(benchmark::State& state) {
 BENCHMARK(BM_Tessellate_ForwardDifferencing);
 BENCHMARK(BM_Tessellate_DeBoor);
 BENCHMARK(BM_Tessellate_CachedBasis);
+BENCHMARK(BM_Tessellate_CachedBasisPerStrip);
 BENCHMARK(BM_Tessellate_CachedBasisAlong)->Arg(4)->Arg(8)->Arg(16)->Arg(32);
 
 }  // namespace

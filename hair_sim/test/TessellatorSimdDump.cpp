@@ -41,6 +41,44 @@ int main() {
       }
     }
   }
+  // The batch form (strips in SIMD lanes on AVX2: four strips of two columns and one row count per kernel
+  // call), against one call per strip in the baseline build: every strip of the loops above, in that order,
+  // per level (runs of 2-column strips of one row count, then the other shapes between them).
+  for (const LevelOfDetail& level : levels) {
+    tessellator.setLevelOfDetail(level);
+    std::vector<std::vector<Vec3>> grids;
+    std::vector<StripInput> strips;
+    for (int rows = 4; rows <= 7; ++rows) {
+      for (int columns = 2; columns <= 3; ++columns) {
+        for (int seed = 0; seed < 5; ++seed) {
+          grids.push_back(curvedGrid(columns, rows, seed, 0.3, 0.4, 0.2));
+        }
+      }
+    }
+    std::size_t g = 0;
+    for (int rows = 4; rows <= 7; ++rows) {
+      for (int columns = 2; columns <= 3; ++columns) {
+        for (int seed = 0; seed < 5; ++seed, ++g) {
+          strips.push_back(
+              {grids[g].data(), columns, rows, seed % 2 == 0 ? 10.0 : (0.03 + 0.005 * seed) * rows});
+        }
+      }
+    }
+    std::vector<StripMesh> meshes(strips.size());
+    tessellator.tessellate(strips.data(), strips.size(), meshes.data());
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+      const StripMesh& m = meshes[i];
+      std::uint64_t hash = 14695981039346656037ULL;
+      hashBytes(hash, m.positions.data(), m.positions.size() * sizeof(Vec3));
+      hashBytes(hash, m.normals.data(), m.normals.size() * sizeof(m.normals[0]));
+      hashBytes(hash, m.tangents.data(), m.tangents.size() * sizeof(m.tangents[0]));
+      hashBytes(hash, m.v_param.data(), m.v_param.size() * sizeof(float));
+      hashBytes(hash, m.u_param.data(), m.u_param.size() * sizeof(float));
+      std::printf("batch, level %d x %d, strip %zu (%d x %d): %016llx\n", level.samples_across,
+                  level.samples_along, i, strips[i].columns, strips[i].rows,
+                  static_cast<unsigned long long>(hash));
+    }
+  }
   // Finite control points near the largest double: a segment overflows to infinity (the walk crosses the
   // hair length there) and a later one is NaN (inf - inf). Every path clips at the infinite segment.
   const double huge = std::numeric_limits<double>::max();

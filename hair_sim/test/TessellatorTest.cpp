@@ -5,6 +5,7 @@
 #include "TestUtil.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -505,6 +506,100 @@ TEST(TessellatorTest, BadInputsThrowNamingTheValue) {
       },
       "max_triangles 799 is below the minimum level's 800 triangles");
   expectInvalid([] { Tessellator::ladderLevel(-1); }, "got -1");
+}
+
+/// The meshes' every bit (vertex grids, positions, frames, parameters).
+bool sameMesh(const StripMesh& a, const StripMesh& b) {
+  const std::size_t n = a.positions.size();
+  return a.n_u == b.n_u && a.n_v == b.n_v && b.positions.size() == n && b.normals.size() == n &&
+         b.tangents.size() == n && a.v_param.size() == n && b.v_param.size() == n && a.u_param.size() == n &&
+         b.u_param.size() == n &&
+         std::memcmp(a.positions.data(), b.positions.data(), n * sizeof(Vec3)) == 0 &&
+         std::memcmp(a.normals.data(), b.normals.data(), n * sizeof(Vec3)) == 0 &&
+         std::memcmp(a.tangents.data(), b.tangents.data(), n * sizeof(Vec3)) == 0 &&
+         std::memcmp(a.v_param.data(), b.v_param.data(), n * sizeof(float)) == 0 &&
+         std::memcmp(a.u_param.data(), b.u_param.data(), n * sizeof(float)) == 0;
+}
+
+// The batch form gives one call per strip's meshes bit for bit: runs of 2-column strips of one row count
+// (four to an AVX2 kernel call, one per lane) between strips of other shapes, clipped and unclipped, a
+// degenerate strip among them, at levels with 2-4 vertex columns (strips in lanes) and 5 (one by one), into
+// meshes that held other grids before.
+TEST(TessellatorTest, BatchGivesTheMeshesOfOneCallPerStrip) {
+  for (const LevelOfDetail& level : {LevelOfDetail{1, 1}, LevelOfDetail{2, 4}, LevelOfDetail{3, 5},
+                                     LevelOfDetail{4, 3}, LevelOfDetail{2, 9}}) {
+    Tessellator batch(level, TessellationMethod::CachedBasis);
+    Tessellator single(level, TessellationMethod::CachedBasis);
+    std::vector<std::vector<Vec3>> grids;
+    std::vector<StripInput> strips;
+    const int shapes[][2] = {{2, 5}, {2, 5}, {2, 5}, {2, 5}, {2, 5}, {2, 5}, {3, 5}, {2, 6},
+                             {2, 6}, {2, 6}, {2, 6}, {2, 5}, {2, 6}, {2, 6}, {2, 6}, {2, 6},
+                             {4, 7}, {2, 4}, {2, 4}, {2, 4}, {2, 4}, {2, 4}, {2, 4}, {2, 4}};
+    for (const auto& shape : shapes) {
+      grids.push_back(curvedGrid(shape[0], shape[1], static_cast<unsigned>(grids.size()) + 40u));
+    }
+    grids[9].assign(grids[9].size(), Vec3(0.1, 0.2, 0.3));  // every point the same: the frames' fallback
+    for (std::size_t i = 0; i < grids.size(); ++i) {
+      const int rows = shapes[i][1];
+      const double hair_length = i % 3 == 0 ? 10.0 : 0.04 * rows + 0.01 * static_cast<double>(i % 5);
+      strips.push_back({grids[i].data(), shapes[i][0], rows, hair_length});
+    }
+    std::vector<StripMesh> meshes(strips.size());
+    std::vector<StripMesh> expected(strips.size());
+    for (std::size_t i = 0; i < strips.size(); ++i) {  // other grids first
+      batch.tessellate(grids[(i + 7) % grids.size()], shapes[(i + 7) % grids.size()][0],
+                       shapes[(i + 7) % grids.size()][1], 0.2, meshes[i]);
+      single.tessellate(strips[i].control_points, strips[i].columns, strips[i].rows, strips[i].hair_length,
+                        expected[i]);
+    }
+    batch.tessellate(strips.data(), strips.size(), meshes.data());
+    for (std::size_t i = 0; i < strips.size(); ++i) {
+      EXPECT_TRUE(sameMesh(meshes[i], expected[i]))
+          << "level " << level.samples_across << " x " << level.samples_along << ", strip " << i;
+    }
+    // A count that is no multiple of four, from an odd start.
+    std::vector<StripMesh> part(7);
+    batch.tessellate(strips.data() + 1, part.size(), part.data());
+    for (std::size_t i = 0; i < part.size(); ++i) EXPECT_TRUE(sameMesh(part[i], expected[i + 1])) << i;
+  }
+}
+
+TEST(TessellatorTest, BatchChecksEveryStripBeforeChangingAnyMesh) {
+  Tessellator tessellator;
+  std::vector<std::vector<Vec3>> grids;
+  for (unsigned i = 0; i < 8; ++i) grids.push_back(curvedGrid(2, 5, 60u + i));
+  std::vector<StripInput> strips;
+  for (const auto& g : grids) strips.push_back({g.data(), 2, 5, 0.3});
+  std::vector<StripMesh> meshes(strips.size());
+  tessellator.tessellate(strips.data(), strips.size(), meshes.data());
+  const std::vector<StripMesh> before = meshes;
+  auto expectUnchanged = [&] {
+    for (std::size_t i = 0; i < meshes.size(); ++i) EXPECT_TRUE(sameMesh(meshes[i], before[i])) << i;
+  };
+  std::vector<Vec3> bad = grids[6];
+  bad[7].y() = std::numeric_limits<double>::quiet_NaN();
+  std::vector<StripInput> broken = strips;
+  broken[6].control_points = bad.data();
+  expectInvalid([&] { tessellator.tessellate(broken.data(), broken.size(), meshes.data(), 100); },
+                "strip 106 : control point 7 (column 1, row 3) is not finite");
+  expectUnchanged();
+  broken = strips;
+  broken[5].hair_length = 0.0;
+  expectInvalid([&] { tessellator.tessellate(broken.data(), broken.size(), meshes.data()); },
+                "strip 5 : hair_length must be positive and finite, got 0");
+  broken = strips;
+  broken[3].columns = 1;
+  expectInvalid([&] { tessellator.tessellate(broken.data(), broken.size(), meshes.data()); },
+                "strip 3 : columns must be >= 2, got 1");
+  broken = strips;
+  broken[7].control_points = nullptr;
+  expectInvalid([&] { tessellator.tessellate(broken.data(), broken.size(), meshes.data()); },
+                "strip 7 : control_points is null");
+  expectUnchanged();
+  expectInvalid([&] { tessellator.tessellate(nullptr, 2, meshes.data()); }, "strips is null with count 2");
+  expectInvalid([&] { tessellator.tessellate(strips.data(), 2, nullptr); }, "meshes is null with count 2");
+  tessellator.tessellate(nullptr, 0, nullptr);  // nothing to do
+  expectUnchanged();
 }
 
 }  // namespace

@@ -173,11 +173,21 @@ void HairMeshBuilder::buildStrips(std::size_t first_strip, std::size_t last_stri
   const std::vector<Vec3>& points = *points_;
   const Ellipsoid& scalp = *scalp_;
   const std::vector<Ellipsoid>& bodies = *bodies_;
+  // The strips are tessellated kBatch at a time in one call (four to a kernel, one per SIMD lane, where
+  // they have two control columns), then finished one by one while their meshes are in cache.
+  constexpr std::size_t kBatch = 16;
+  StripInput inputs[kBatch];  // (buildStrips runs on several threads at once: on the stack)
   for (std::size_t s = first_strip; s < last_strip; ++s) {
+    if ((s - first_strip) % kBatch == 0) {
+      const std::size_t count = std::min(kBatch, last_strip - s);
+      for (std::size_t k = 0; k < count; ++k) {
+        const Strip& strip = hairstyle_.strips[s + k];
+        inputs[k] = {points.data() + (*strip_offsets_)[s + k], strip.columns, strip.rows, strip.hair_length};
+      }
+      tessellator.tessellate(inputs, count, &meshes_[s], s);
+    }
     const Strip& strip = hairstyle_.strips[s];
-    const std::size_t first = static_cast<std::size_t>((*strip_offsets_)[s]);
     StripMesh& mesh = meshes_[s];
-    tessellator.tessellate(points.data() + first, strip.columns, strip.rows, strip.hair_length, mesh);
     for (int iu = 0; iu < mesh.n_u; ++iu) {
       Vec3& p = mesh.positions[static_cast<std::size_t>(mesh.index(iu, 0))];
       p = scalp.radialProjection(p);

@@ -294,7 +294,7 @@ void validateLevel(const LevelOfDetail& level, const char* where) {
 }
 
 /// Throws when the grid is too small; `strip` >= 0 is named in the message.
-void validateShape(int columns, int rows, const char* where, int strip = -1) {
+void validateShape(int columns, int rows, const char* where, long long strip = -1) {
   if (columns >= 2 && rows >= 4) {
     return;
   }
@@ -304,6 +304,32 @@ void validateShape(int columns, int rows, const char* where, int strip = -1) {
     throw std::invalid_argument(prefix + " columns must be >= 2, got " + std::to_string(columns));
   }
   throw std::invalid_argument(prefix + " rows must be >= 4, got " + std::to_string(rows));
+}
+
+/// tessellate()'s checks of one strip; `strip` >= 0 is named in the message.
+void checkStrip(const Vec3* control_points, int columns, int rows, double hair_length, const char* where,
+                long long strip) {
+  auto prefix = [where, strip] {  // only on the way to a throw
+    return std::string(where) + (strip >= 0 ? " : strip " + std::to_string(strip) + " :" : std::string(" :"));
+  };
+  if (control_points == nullptr) {
+    throw std::invalid_argument(prefix() + " control_points is null");
+  }
+  validateShape(columns, rows, where, strip);
+  if (!(hair_length > 0.0) || !std::isfinite(hair_length)) {
+    throw std::invalid_argument(prefix() + " hair_length must be positive and finite, got " +
+                                std::to_string(hair_length));
+  }
+  if (!allFinite(control_points->data(), 3 * static_cast<std::size_t>(columns) * rows)) {
+    for (int i = 0; i < columns * rows; ++i) {
+      if (control_points[i].allFinite()) {
+        continue;
+      }
+      throw std::invalid_argument(prefix() + " control point " + std::to_string(i) + " (column " +
+                                  std::to_string(i % columns) + ", row " + std::to_string(i / columns) +
+                                  ") is not finite");
+    }
+  }
 }
 
 /// Extended control point (phantoms by reflection, see BSplineSurface) without range checks.
@@ -397,15 +423,19 @@ void clipColumn(StripMesh& mesh, int iu, int iv, const double* previous, const d
 
 #if defined(HAIR_SIM_SSE2)
 /// CachedBasis kernels: raw derivatives of sample j of a vertex column from the column curve arrays (see
-/// cachedColumnPairs; only needed where a column is clipped).
-void derivativesAt(const double* curve, const double* curve_dv, std::size_t stride, const double* weight,
-                   const double* derivative_weight, int width, int j, double du[3], double dv[3]) {
+/// cachedColumnPairs; only needed where a column is clipped): coordinate q of sample j at
+/// curve[q * stride + j * row_step].
+void derivativesAt(const double* curve, const double* curve_dv, std::size_t stride, std::size_t row_step,
+                   const double* weight, const double* derivative_weight, int width, int j, double du[3],
+                   double dv[3]) {
   for (int k = 0; k < 3; ++k) {
     du[k] = 0.0;
     dv[k] = 0.0;
     for (int b = 0; b < width; ++b) {
-      du[k] += derivative_weight[b] * curve[static_cast<std::size_t>(3 * b + k) * stride + j];
-      dv[k] += weight[b] * curve_dv[static_cast<std::size_t>(3 * b + k) * stride + j];
+      const std::size_t at =
+          static_cast<std::size_t>(3 * b + k) * stride + static_cast<std::size_t>(j) * row_step;
+      du[k] += derivative_weight[b] * curve[at];
+      dv[k] += weight[b] * curve_dv[at];
     }
   }
 }
@@ -425,12 +455,14 @@ void normalizeColumnFrom(StripMesh& mesh, int iu, int iv) {
 /// from `previous` by `step`): the raw derivatives of row j - 1 from the column curves (derivativesAt), then
 /// clipColumn and the unit frames of the rows from j (normalizeColumnFrom).
 void clipCachedColumn(StripMesh& mesh, int iu, int j, const double* curve, const double* curve_dv,
-                      std::size_t stride, const double* weight, const double* derivative_weight, int width,
-                      const double* previous, const double* step, double segment, double length,
-                      double hair_length, const double* current_du, const double* current_dv) {
+                      std::size_t stride, std::size_t row_step, const double* weight,
+                      const double* derivative_weight, int width, const double* previous, const double* step,
+                      double segment, double length, double hair_length, const double* current_du,
+                      const double* current_dv) {
   double previous_du[3];
   double previous_dv[3];
-  derivativesAt(curve, curve_dv, stride, weight, derivative_weight, width, j - 1, previous_du, previous_dv);
+  derivativesAt(curve, curve_dv, stride, row_step, weight, derivative_weight, width, j - 1, previous_du,
+                previous_dv);
   clipColumn(mesh, iu, j, previous, step, segment, length, hair_length, previous_du, current_du, previous_dv,
              current_dv);
   normalizeColumnFrom(mesh, iu, j);
@@ -528,7 +560,7 @@ void cachedColumnPairs(const double* curve, const double* curve_dv, int stride, 
       if (l0 > hair_length) {  // iv > 0 here: the root has l0 = 0
         double previous_p[3];
         lane(last, 1, previous_p);
-        clipCachedColumn(mesh, iu, iv, curve, curve_dv, s, weight, derivative_weight, W, previous_p, step0,
+        clipCachedColumn(mesh, iu, iv, curve, curve_dv, s, 1, weight, derivative_weight, W, previous_p, step0,
                          s0, length, hair_length, du0, dv0);
         return;
       }
@@ -576,6 +608,10 @@ void cachedColumnPairs(const double* curve, const double* curve_dv, int stride, 
 /// two, half the lanes idle and the rows kernel took 1.16 x the time of the columns kernel (2 x 5 strips at
 /// level 1 x 4); with three 0.88 x, with four 0.75 x (4 x 5 strips at 1 x 4).
 constexpr int kMinRowLanes = 3;
+
+/// Strips in lanes (Tessellator's batch form, cachedStripRows): strips of two control columns at up to 3
+/// samples across (2-4 vertex columns).
+constexpr int kMaxLaneSamplesAcross = 3;
 
 /// Four 3D vectors as x, y, z lane quads (lane l: sample iv + l).
 struct Quad3 {
@@ -803,7 +839,7 @@ HAIR_SIM_AVX2_TARGET void cachedColumnQuads(const double* curve, const double* c
       current_dv[k] = lanes[6 + k][crossing];
       step[k] = lanes[k][crossing] - previous[k];
     }
-    clipCachedColumn(mesh, iu, j, curve, curve_dv, s, weight, derivative_weight, W, previous, step,
+    clipCachedColumn(mesh, iu, j, curve, curve_dv, s, 1, weight, derivative_weight, W, previous, step,
                      segment[crossing], crossing == 0 ? length : walked[crossing - 1], hair_length,
                      current_du, current_dv);
     return;
@@ -931,9 +967,199 @@ HAIR_SIM_AVX2_TARGET void cachedRowQuads(const double* curve, const double* curv
       continue;
     }
     // crossing_row[l] > 0: the root has a zero segment.
-    clipCachedColumn(mesh, iu0 + l, crossing_row[l], curve, curve_dv, s, weights[l], derivatives[l], W,
+    clipCachedColumn(mesh, iu0 + l, crossing_row[l], curve, curve_dv, s, 1, weights[l], derivatives[l], W,
                      crossing_previous[l], crossing_step[l], crossing_segment[l], crossing_length[l],
                      hair_length, crossing_du[l], crossing_dv[l]);
+  }
+}
+
+/// CachedBasis stage 1 (AVX2), strips in lanes: as columnCurveQuads, each sample with its lane's weights of
+/// the quads' window (so every lane computes what columnCurveQuads computes for it, in the same order), four
+/// strips at once. control: coordinate i of strip l at control[4 * i + l]; out: coordinate q (column * 3 +
+/// k) of sample iv at curve[4 * (q * n_v + iv) + l].
+template <int K>
+HAIR_SIM_AVX2_TARGET void stripCurveLanes(const double* control, int columns, int n_v, const int* first,
+                                          const double* weight, const double* derivative, double* curve,
+                                          double* curve_dv) {
+  const int row = 3 * columns;
+  const std::size_t column_stride = 4 * static_cast<std::size_t>(n_v);
+  for (int iv = 0; iv < n_v; ++iv) {
+    const int g = iv / 4;
+    const int l = iv % 4;
+    __m256d w[K];
+    __m256d d[K];
+#pragma GCC unroll 8
+    for (int m = 0; m < K; ++m) {
+      w[m] = _mm256_set1_pd(weight[4 * (g * K + m) + l]);
+      d[m] = _mm256_set1_pd(derivative[4 * (g * K + m) + l]);
+    }
+    const double* base = control + 4 * static_cast<std::size_t>(first[g]) * row;
+    double* out = curve + 4 * static_cast<std::size_t>(iv);
+    double* out_dv = curve_dv + 4 * static_cast<std::size_t>(iv);
+    for (int q = 0; q < row; ++q) {
+      const double* b = base + 4 * q;
+      __m256d x = _mm256_loadu_pd(b);
+      __m256d value = w[0] * x;
+      __m256d slope = d[0] * x;
+#pragma GCC unroll 8
+      for (int m = 1; m < K; ++m) {
+        x = _mm256_loadu_pd(b + 4 * m * row);
+        value += w[m] * x;
+        slope += d[m] * x;
+      }
+      _mm256_storeu_pd(out + static_cast<std::size_t>(q) * column_stride, value);
+      _mm256_storeu_pd(out_dv + static_cast<std::size_t>(q) * column_stride, slope);
+    }
+  }
+}
+
+/// Stores lane l at out[l] + offset (three doubles each).
+HAIR_SIM_AVX2_TARGET inline void storeStripLanes(const Quad3& value, double* const out[4],
+                                                 std::size_t offset) {
+  const __m256d even = _mm256_unpacklo_pd(value.x, value.y);  // x0 y0 | x2 y2
+  const __m256d odd = _mm256_unpackhi_pd(value.x, value.y);   // x1 y1 | x3 y3
+  const __m128d z_low = _mm256_castpd256_pd128(value.z);
+  const __m128d z_high = _mm256_extractf128_pd(value.z, 1);
+  _mm_storeu_pd(out[0] + offset, _mm256_castpd256_pd128(even));
+  _mm_store_sd(out[0] + offset + 2, z_low);
+  _mm_storeu_pd(out[1] + offset, _mm256_castpd256_pd128(odd));
+  _mm_storeh_pd(out[1] + offset + 2, z_low);
+  _mm_storeu_pd(out[2] + offset, _mm256_extractf128_pd(even, 1));
+  _mm_store_sd(out[2] + offset + 2, z_high);
+  _mm_storeu_pd(out[3] + offset, _mm256_extractf128_pd(odd, 1));
+  _mm_storeh_pd(out[3] + offset + 2, z_high);
+}
+
+/// CachedBasis stage 2 (AVX2), strips in lanes: four strips of two control columns and one shape, one strip
+/// per lane, all NU (2-4) vertex columns per row step. A row's curve values (from stripCurveLanes: lane l at
+/// curve + l, coordinate stride 4 n_v, row step 4) are loaded once for its NU columns, whose length walks are
+/// independent chains, and no lane idles (cachedRowQuads, with one strip's three columns in lanes, leaves one
+/// of four). Each lane computes what cachedRowQuads and cachedColumnQuads compute for its strip's column, in
+/// the same order; a lane that crosses its hair length has its column finished by clipColumn after the last
+/// row.
+template <int W, int NU>
+HAIR_SIM_AVX2_TARGET void cachedStripRows(const double* curve, const double* curve_dv,
+                                          const double* const* weights, const double* const* derivatives,
+                                          const double* hair_length, const double* inverse_length,
+                                          StripMesh* meshes) {
+  const int n_v = meshes[0].n_v;
+  const std::size_t s = 4 * static_cast<std::size_t>(n_v);
+  double* positions[4];
+  double* normals[4];
+  double* tangents[4];
+  float* v_param[4];
+  for (int l = 0; l < 4; ++l) {
+    const MeshArrays arrays = meshArrays(meshes[l]);
+    positions[l] = arrays.positions;
+    normals[l] = arrays.normals;
+    tangents[l] = arrays.tangents;
+    v_param[l] = arrays.v_param;
+  }
+  __m256d w[NU][W];
+  __m256d dw[NU][W];
+  for (int u = 0; u < NU; ++u) {
+    for (int b = 0; b < W; ++b) {
+      w[u][b] = _mm256_set1_pd(weights[u][b]);
+      dw[u][b] = _mm256_set1_pd(derivatives[u][b]);
+    }
+  }
+  const __m256d limit = _mm256_loadu_pd(hair_length);
+  const __m256d inverse = _mm256_loadu_pd(inverse_length);
+  int crossed[NU] = {};
+  int crossing_row[NU][4] = {};
+  double crossing_length[NU][4];
+  double crossing_segment[NU][4];
+  double crossing_previous[NU][4][3];
+  double crossing_step[NU][4][3];
+  double crossing_du[NU][4][3];
+  double crossing_dv[NU][4][3];
+  __m256d length[NU];
+  Quad3 last[NU];
+  for (int u = 0; u < NU; ++u) {
+    length[u] = _mm256_setzero_pd();
+    last[u] = Quad3{};
+  }
+  for (int iv = 0; iv < n_v; ++iv) {
+    Quad3 c[W];
+    Quad3 d[W];
+#pragma GCC unroll 4
+    for (int b = 0; b < W; ++b) {
+      c[b] = loadQuad3(curve + 3 * b * s + 4 * static_cast<std::size_t>(iv), s);
+      d[b] = loadQuad3(curve_dv + 3 * b * s + 4 * static_cast<std::size_t>(iv), s);
+    }
+#pragma GCC unroll 8
+    for (int u = 0; u < NU; ++u) {
+      Quad3 p = scaled(w[u][0], c[0]);
+      Quad3 du = scaled(dw[u][0], c[0]);
+      Quad3 dv = scaled(w[u][0], d[0]);
+#pragma GCC unroll 4
+      for (int b = 1; b < W; ++b) {
+        p = plus(p, scaled(w[u][b], c[b]));
+        du = plus(du, scaled(dw[u][b], c[b]));
+        dv = plus(dv, scaled(w[u][b], d[b]));
+      }
+      if (iv == 0) {  // the root has no previous sample: a zero first segment
+        last[u] = p;
+      }
+      const Quad3 step{p.x - last[u].x, p.y - last[u].y, p.z - last[u].z};
+      const __m256d segment = _mm256_sqrt_pd(dot4(step, step));
+      const __m256d walked = length[u] + segment;
+      const int over = _mm256_movemask_pd(_mm256_cmp_pd(walked, limit, _CMP_GT_OQ)) & ~crossed[u];
+      if (over != 0) {  // rare: once per lane and column at most
+        for (int l = 0; l < 4; ++l) {
+          if (!(over & (1 << l))) {
+            continue;
+          }
+          crossing_row[u][l] = iv;
+          crossing_segment[u][l] = segment[l];
+          crossing_length[u][l] = length[u][l];
+          const double previous[3] = {last[u].x[l], last[u].y[l], last[u].z[l]};
+          const double lane_step[3] = {step.x[l], step.y[l], step.z[l]};
+          const double lane_du[3] = {du.x[l], du.y[l], du.z[l]};
+          const double lane_dv[3] = {dv.x[l], dv.y[l], dv.z[l]};
+          for (int k = 0; k < 3; ++k) {
+            crossing_previous[u][l][k] = previous[k];
+            crossing_step[u][l][k] = lane_step[k];
+            crossing_du[u][l][k] = lane_du[k];
+            crossing_dv[u][l][k] = lane_dv[k];
+          }
+        }
+        crossed[u] |= over;
+      }
+      const std::size_t a = static_cast<std::size_t>(iv) * NU + u;
+      storeStripLanes(p, positions, 3 * a);
+      Quad3 n;
+      Quad3 t;
+      if (unitFrames4(du, dv, n, t)) {
+        storeStripLanes(n, normals, 3 * a);
+        storeStripLanes(t, tangents, 3 * a);
+      } else {
+        storeStripLanes(du, normals, 3 * a);
+        storeStripLanes(dv, tangents, 3 * a);
+        for (int l = 0; l < 4; ++l) {
+          normalizeFrame(normals[l] + 3 * a, tangents[l] + 3 * a);
+        }
+      }
+      const __m128 parameter = _mm256_cvtpd_ps(walked * inverse);
+      const __m128 high = _mm_movehl_ps(parameter, parameter);
+      _mm_store_ss(v_param[0] + a, parameter);
+      _mm_store_ss(v_param[1] + a, _mm_movehdup_ps(parameter));
+      _mm_store_ss(v_param[2] + a, high);
+      _mm_store_ss(v_param[3] + a, _mm_movehdup_ps(high));
+      length[u] = walked;
+      last[u] = p;
+    }
+  }
+  for (int u = 0; u < NU; ++u) {
+    for (int l = 0; l < 4; ++l) {
+      if (!(crossed[u] & (1 << l))) {
+        continue;
+      }
+      clipCachedColumn(meshes[l], u, crossing_row[u][l], curve + l, curve_dv + l, s, 4, weights[u],
+                       derivatives[u], W, crossing_previous[u][l], crossing_step[u][l],
+                       crossing_segment[u][l], crossing_length[u][l], hair_length[l], crossing_du[u][l],
+                       crossing_dv[u][l]);
+    }
   }
 }
 #endif
@@ -1302,25 +1528,58 @@ void Tessellator::tessellate(const std::vector<Vec3>& control_points, int column
 
 void Tessellator::tessellate(const Vec3* control_points, int columns, int rows, double hair_length,
                              StripMesh& mesh) {
+  checkStrip(control_points, columns, rows, hair_length, "Tessellator::tessellate(...)", -1);
+  tessellateChecked(control_points, columns, rows, hair_length, mesh);
+}
+
+void Tessellator::tessellate(const StripInput* strips, std::size_t count, StripMesh* meshes,
+                             std::size_t first_index) {
   const char* where = "Tessellator::tessellate(...)";
-  if (control_points == nullptr) {
-    throw std::invalid_argument(std::string(where) + " : control_points is null");
+  if (count == 0) {
+    return;
   }
-  validateShape(columns, rows, where);
-  if (!(hair_length > 0.0) || !std::isfinite(hair_length)) {
-    throw std::invalid_argument(std::string(where) + " : hair_length must be positive and finite, got " +
-                                std::to_string(hair_length));
+  if (strips == nullptr || meshes == nullptr) {
+    throw std::invalid_argument(std::string(where) + " : " + (strips == nullptr ? "strips" : "meshes") +
+                                " is null with count " + std::to_string(count));
   }
-  if (!allFinite(control_points->data(), 3 * static_cast<std::size_t>(columns) * rows)) {
-    for (int i = 0; i < columns * rows; ++i) {
-      if (control_points[i].allFinite()) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const StripInput& strip = strips[i];
+    checkStrip(strip.control_points, strip.columns, strip.rows, strip.hair_length, where,
+               static_cast<long long>(first_index + i));
+  }
+  std::size_t i = 0;
+#if defined(HAIR_SIM_AVX2)
+  if (method_ == TessellationMethod::CachedBasis && cpuHasAvx2()) {
+    while (i + 4 <= count) {
+      const StripInput* four = strips + i;
+      bool same = level_of_detail_.samples_across <= kMaxLaneSamplesAcross;
+      for (int l = 0; l < 4; ++l) {
+        same = same && four[l].columns == 2 && four[l].rows == four[0].rows;
+      }
+      if (!same) {
+        tessellateChecked(four->control_points, four->columns, four->rows, four->hair_length, meshes[i]);
+        ++i;
         continue;
       }
-      throw std::invalid_argument(std::string(where) + " : control point " + std::to_string(i) + " (column " +
-                                  std::to_string(i % columns) + ", row " + std::to_string(i / columns) +
-                                  ") is not finite");
+      const int n_u = verticesAcross(four->columns, level_of_detail_);
+      const int n_v = verticesAlong(four->rows, level_of_detail_);
+      const std::vector<float>& u_param = uParam(n_u, n_v);
+      for (int l = 0; l < 4; ++l) {
+        prepareMesh(meshes[i + static_cast<std::size_t>(l)], n_u, n_v, u_param);
+      }
+      tessellateCachedBasisLanes(four, meshes + i);
+      i += 4;
     }
   }
+#endif
+  for (; i < count; ++i) {
+    tessellateChecked(strips[i].control_points, strips[i].columns, strips[i].rows, strips[i].hair_length,
+                      meshes[i]);
+  }
+}
+
+void Tessellator::tessellateChecked(const Vec3* control_points, int columns, int rows, double hair_length,
+                                    StripMesh& mesh) {
   const int n_u = verticesAcross(columns, level_of_detail_);
   const int n_v = verticesAlong(rows, level_of_detail_);
   prepareMesh(mesh, n_u, n_v, uParam(n_u, n_v));
@@ -1659,6 +1918,85 @@ void Tessellator::tessellateCachedBasis(const Vec3* points, int columns, int row
     }
   }
   normalizeFrames(mesh.normals.data(), mesh.tangents.data(), mesh.positions.size());
+#endif
+}
+
+void Tessellator::tessellateCachedBasisLanes(const StripInput* strips, StripMesh* meshes) {
+#if defined(HAIR_SIM_AVX2)
+  const int columns = strips[0].columns;
+  const int rows = strips[0].rows;
+  const BasisTable& across = acrossTable(columns);
+  const BasisTable& along = alongTable(rows);
+  const int n_u = meshes[0].n_u;
+  const int n_v = meshes[0].n_v;
+  const std::size_t coordinates = 3 * static_cast<std::size_t>(columns) * static_cast<std::size_t>(rows);
+  if (lane_control_.size() < 4 * coordinates) {
+    lane_control_.resize(4 * coordinates);
+  }
+  for (int l = 0; l < 4; ++l) {
+    const double* control = strips[l].control_points->data();
+    for (std::size_t i = 0; i < coordinates; ++i) {
+      lane_control_[4 * i + static_cast<std::size_t>(l)] = control[i];
+    }
+  }
+  const std::size_t curve_size = 4 * static_cast<std::size_t>(3 * columns) * static_cast<std::size_t>(n_v);
+  if (curve_.size() < curve_size) {
+    curve_.resize(curve_size);
+    curve_dv_.resize(curve_size);
+  }
+  const LaneGroups& groups = along.quads;
+  const int* first = groups.first.data();
+  const double* weight = groups.weight.data();
+  const double* derivative = groups.derivative.data();
+  switch (groups.window) {
+    case 4:
+      stripCurveLanes<4>(lane_control_.data(), columns, n_v, first, weight, derivative, curve_.data(),
+                         curve_dv_.data());
+      break;
+    case 5:
+      stripCurveLanes<5>(lane_control_.data(), columns, n_v, first, weight, derivative, curve_.data(),
+                         curve_dv_.data());
+      break;
+    case 6:
+      stripCurveLanes<6>(lane_control_.data(), columns, n_v, first, weight, derivative, curve_.data(),
+                         curve_dv_.data());
+      break;
+    default:
+      stripCurveLanes<7>(lane_control_.data(), columns, n_v, first, weight, derivative, curve_.data(),
+                         curve_dv_.data());
+      break;
+  }
+  double hair_length[4];
+  double inverse_length[4];
+  for (int l = 0; l < 4; ++l) {
+    hair_length[l] = strips[l].hair_length;
+    inverse_length[l] = 1.0 / strips[l].hair_length;
+  }
+  const double* weights[4];
+  const double* derivatives[4];
+  for (int iu = 0; iu < n_u; ++iu) {
+    weights[iu] = across.samples[static_cast<std::size_t>(iu)].weight;
+    derivatives[iu] = across.samples[static_cast<std::size_t>(iu)].derivative;
+  }
+  switch (n_u) {
+    case 2:
+      cachedStripRows<2, 2>(curve_.data(), curve_dv_.data(), weights, derivatives, hair_length,
+                            inverse_length, meshes);
+      break;
+    case 3:
+      cachedStripRows<2, 3>(curve_.data(), curve_dv_.data(), weights, derivatives, hair_length,
+                            inverse_length, meshes);
+      break;
+    default:
+      cachedStripRows<2, 4>(curve_.data(), curve_dv_.data(), weights, derivatives, hair_length,
+                            inverse_length, meshes);
+      break;
+  }
+#else
+  for (int l = 0; l < 4; ++l) {
+    tessellateCachedBasis(strips[l].control_points, strips[l].columns, strips[l].rows, strips[l].hair_length,
+                          meshes[l]);
+  }
 #endif
 }
 
