@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "../SimdDispatch.hpp"
 
@@ -973,46 +974,6 @@ HAIR_SIM_AVX2_TARGET void cachedRowQuads(const double* curve, const double* curv
   }
 }
 
-/// CachedBasis stage 1 (AVX2), strips in lanes: as columnCurveQuads, each sample with its lane's weights of
-/// the quads' window (so every lane computes what columnCurveQuads computes for it, in the same order), four
-/// strips at once. control: coordinate i of strip l at control[4 * i + l]; out: coordinate q (column * 3 +
-/// k) of sample iv at curve[4 * (q * n_v + iv) + l].
-template <int K>
-HAIR_SIM_AVX2_TARGET void stripCurveLanes(const double* control, int columns, int n_v, const int* first,
-                                          const double* weight, const double* derivative, double* curve,
-                                          double* curve_dv) {
-  const int row = 3 * columns;
-  const std::size_t column_stride = 4 * static_cast<std::size_t>(n_v);
-  for (int iv = 0; iv < n_v; ++iv) {
-    const int g = iv / 4;
-    const int l = iv % 4;
-    __m256d w[K];
-    __m256d d[K];
-#pragma GCC unroll 8
-    for (int m = 0; m < K; ++m) {
-      w[m] = _mm256_set1_pd(weight[4 * (g * K + m) + l]);
-      d[m] = _mm256_set1_pd(derivative[4 * (g * K + m) + l]);
-    }
-    const double* base = control + 4 * static_cast<std::size_t>(first[g]) * row;
-    double* out = curve + 4 * static_cast<std::size_t>(iv);
-    double* out_dv = curve_dv + 4 * static_cast<std::size_t>(iv);
-    for (int q = 0; q < row; ++q) {
-      const double* b = base + 4 * q;
-      __m256d x = _mm256_loadu_pd(b);
-      __m256d value = w[0] * x;
-      __m256d slope = d[0] * x;
-#pragma GCC unroll 8
-      for (int m = 1; m < K; ++m) {
-        x = _mm256_loadu_pd(b + 4 * m * row);
-        value += w[m] * x;
-        slope += d[m] * x;
-      }
-      _mm256_storeu_pd(out + static_cast<std::size_t>(q) * column_stride, value);
-      _mm256_storeu_pd(out_dv + static_cast<std::size_t>(q) * column_stride, slope);
-    }
-  }
-}
-
 /// Stores lane l at out[l] + offset (three doubles each).
 HAIR_SIM_AVX2_TARGET inline void storeStripLanes(const Quad3& value, double* const out[4],
                                                  std::size_t offset) {
@@ -1030,20 +991,47 @@ HAIR_SIM_AVX2_TARGET inline void storeStripLanes(const Quad3& value, double* con
   _mm_storeh_pd(out[3] + offset + 2, z_high);
 }
 
-/// CachedBasis stage 2 (AVX2), strips in lanes: four strips of two control columns and one shape, one strip
-/// per lane, all NU (2-4) vertex columns per row step. A row's curve values (from stripCurveLanes: lane l at
-/// curve + l, coordinate stride 4 n_v, row step 4) are loaded once for its NU columns, whose length walks are
-/// independent chains, and no lane idles (cachedRowQuads, with one strip's three columns in lanes, leaves one
-/// of four). Each lane computes what cachedRowQuads and cachedColumnQuads compute for its strip's column, in
-/// the same order; a lane that crosses its hair length has its column finished by clipColumn after the last
-/// row.
-template <int W, int NU>
-HAIR_SIM_AVX2_TARGET void cachedStripRows(const double* curve, const double* curve_dv,
-                                          const double* const* weights, const double* const* derivatives,
-                                          const double* hair_length, const double* inverse_length,
-                                          StripMesh* meshes) {
+/// The control rows of four strips of two control columns in lanes (Tessellator::tessellateCachedBasisLanes):
+/// coordinate q (column * 3 + k) of control row r of strip l at control[4 * (6 r + q) + l].
+constexpr int kLaneControlRow = 4 * 6;
+
+/// The column curves (c) and their d/dv (d) of lane l at sample iv, coordinate q = column * 3 + k: what
+/// stripRows computes in that lane (the quads' window of K control rows from first[iv / 4], with sample iv's
+/// weights of along_weight[4 * (g * K + m) + iv % 4], in the same order).
+void laneCurvesAt(const double* control, const int* first, const double* along_weight,
+                  const double* along_derivative, int window, int iv, int l, double c[6], double d[6]) {
+  const int g = iv / 4;
+  const double* aw = along_weight + 4 * g * window + iv % 4;
+  const double* ad = along_derivative + 4 * g * window + iv % 4;
+  const double* base = control + static_cast<std::size_t>(kLaneControlRow) * first[g] + l;
+  for (int q = 0; q < 6; ++q) {
+    double value = aw[0] * base[4 * q];
+    double slope = ad[0] * base[4 * q];
+    for (int m = 1; m < window; ++m) {
+      const double x = base[4 * q + kLaneControlRow * m];
+      value += aw[4 * m] * x;
+      slope += ad[4 * m] * x;
+    }
+    c[q] = value;
+    d[q] = slope;
+  }
+}
+
+/// CachedBasis (AVX2), strips in lanes: four strips of two control columns and one row count, one strip per
+/// lane (control: kLaneControlRow), every row step all NU (2-4) vertex columns. The row's column curves are
+/// computed in the step from the quads' window of K control rows (no curve arrays: that work fills the
+/// ports the square roots and divisions leave idle), then shared by the NU columns, whose length walks are
+/// independent chains; no lane idles (cachedRowQuads, with one strip's three columns in lanes, leaves one of
+/// four). Each lane computes what columnCurveQuads, then cachedRowQuads or cachedColumnQuads compute for its
+/// strip's column, in the same order; a lane that crosses its hair length has its column finished by
+/// clipColumn after the last row.
+template <int K, int NU>
+HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, const double* along_weight,
+                                    const double* along_derivative, const double* const* weights,
+                                    const double* const* derivatives, const double* hair_length,
+                                    const double* inverse_length, StripMesh* meshes) {
+  constexpr int W = 2;
   const int n_v = meshes[0].n_v;
-  const std::size_t s = 4 * static_cast<std::size_t>(n_v);
   double* positions[4];
   double* normals[4];
   double* tangents[4];
@@ -1080,13 +1068,31 @@ HAIR_SIM_AVX2_TARGET void cachedStripRows(const double* curve, const double* cur
     last[u] = Quad3{};
   }
   for (int iv = 0; iv < n_v; ++iv) {
-    Quad3 c[W];
-    Quad3 d[W];
-#pragma GCC unroll 4
-    for (int b = 0; b < W; ++b) {
-      c[b] = loadQuad3(curve + 3 * b * s + 4 * static_cast<std::size_t>(iv), s);
-      d[b] = loadQuad3(curve_dv + 3 * b * s + 4 * static_cast<std::size_t>(iv), s);
+    // The two control columns' curves at this sample (stage 1 of the other kernels).
+    __m256d curve[6];
+    __m256d slope[6];
+    {
+      const int g = iv / 4;
+      const double* aw = along_weight + 4 * g * K + iv % 4;
+      const double* ad = along_derivative + 4 * g * K + iv % 4;
+      const double* base = control + static_cast<std::size_t>(kLaneControlRow) * first[g];
+#pragma GCC unroll 6
+      for (int q = 0; q < 6; ++q) {
+        __m256d x = _mm256_loadu_pd(base + 4 * q);
+        __m256d value = _mm256_set1_pd(aw[0]) * x;
+        __m256d rate = _mm256_set1_pd(ad[0]) * x;
+#pragma GCC unroll 8
+        for (int m = 1; m < K; ++m) {
+          x = _mm256_loadu_pd(base + 4 * q + kLaneControlRow * m);
+          value += _mm256_set1_pd(aw[4 * m]) * x;
+          rate += _mm256_set1_pd(ad[4 * m]) * x;
+        }
+        curve[q] = value;
+        slope[q] = rate;
+      }
     }
+    const Quad3 c[W] = {{curve[0], curve[1], curve[2]}, {curve[3], curve[4], curve[5]}};
+    const Quad3 d[W] = {{slope[0], slope[1], slope[2]}, {slope[3], slope[4], slope[5]}};
 #pragma GCC unroll 8
     for (int u = 0; u < NU; ++u) {
       Quad3 p = scaled(w[u][0], c[0]);
@@ -1155,10 +1161,13 @@ HAIR_SIM_AVX2_TARGET void cachedStripRows(const double* curve, const double* cur
       if (!(crossed[u] & (1 << l))) {
         continue;
       }
-      clipCachedColumn(meshes[l], u, crossing_row[u][l], curve + l, curve_dv + l, s, 4, weights[u],
-                       derivatives[u], W, crossing_previous[u][l], crossing_step[u][l],
-                       crossing_segment[u][l], crossing_length[u][l], hair_length[l], crossing_du[u][l],
-                       crossing_dv[u][l]);
+      // crossing_row > 0 (the root has a zero segment): the curves of the row before it.
+      double c[6];
+      double d[6];
+      laneCurvesAt(control, first, along_weight, along_derivative, K, crossing_row[u][l] - 1, l, c, d);
+      clipCachedColumn(meshes[l], u, crossing_row[u][l], c, d, 1, 0, weights[u], derivatives[u], W,
+                       crossing_previous[u][l], crossing_step[u][l], crossing_segment[u][l],
+                       crossing_length[u][l], hair_length[l], crossing_du[u][l], crossing_dv[u][l]);
     }
   }
 }
@@ -1928,7 +1937,6 @@ void Tessellator::tessellateCachedBasisLanes(const StripInput* strips, StripMesh
   const BasisTable& across = acrossTable(columns);
   const BasisTable& along = alongTable(rows);
   const int n_u = meshes[0].n_u;
-  const int n_v = meshes[0].n_v;
   const std::size_t coordinates = 3 * static_cast<std::size_t>(columns) * static_cast<std::size_t>(rows);
   if (lane_control_.size() < 4 * coordinates) {
     lane_control_.resize(4 * coordinates);
@@ -1939,33 +1947,7 @@ void Tessellator::tessellateCachedBasisLanes(const StripInput* strips, StripMesh
       lane_control_[4 * i + static_cast<std::size_t>(l)] = control[i];
     }
   }
-  const std::size_t curve_size = 4 * static_cast<std::size_t>(3 * columns) * static_cast<std::size_t>(n_v);
-  if (curve_.size() < curve_size) {
-    curve_.resize(curve_size);
-    curve_dv_.resize(curve_size);
-  }
   const LaneGroups& groups = along.quads;
-  const int* first = groups.first.data();
-  const double* weight = groups.weight.data();
-  const double* derivative = groups.derivative.data();
-  switch (groups.window) {
-    case 4:
-      stripCurveLanes<4>(lane_control_.data(), columns, n_v, first, weight, derivative, curve_.data(),
-                         curve_dv_.data());
-      break;
-    case 5:
-      stripCurveLanes<5>(lane_control_.data(), columns, n_v, first, weight, derivative, curve_.data(),
-                         curve_dv_.data());
-      break;
-    case 6:
-      stripCurveLanes<6>(lane_control_.data(), columns, n_v, first, weight, derivative, curve_.data(),
-                         curve_dv_.data());
-      break;
-    default:
-      stripCurveLanes<7>(lane_control_.data(), columns, n_v, first, weight, derivative, curve_.data(),
-                         curve_dv_.data());
-      break;
-  }
   double hair_length[4];
   double inverse_length[4];
   for (int l = 0; l < 4; ++l) {
@@ -1978,18 +1960,37 @@ void Tessellator::tessellateCachedBasisLanes(const StripInput* strips, StripMesh
     weights[iu] = across.samples[static_cast<std::size_t>(iu)].weight;
     derivatives[iu] = across.samples[static_cast<std::size_t>(iu)].derivative;
   }
+  // The quads' window: 4 control rows at 4 or more samples along, up to 7 at 1.
+  auto run = [&](auto kernel) {
+    kernel(lane_control_.data(), groups.first.data(), groups.weight.data(), groups.derivative.data(), weights,
+           derivatives, hair_length, inverse_length, meshes);
+  };
+  auto withWindow = [&](auto nu) {
+    constexpr int NU = decltype(nu)::value;
+    switch (groups.window) {
+      case 4:
+        run(stripRows<4, NU>);
+        break;
+      case 5:
+        run(stripRows<5, NU>);
+        break;
+      case 6:
+        run(stripRows<6, NU>);
+        break;
+      default:
+        run(stripRows<7, NU>);
+        break;
+    }
+  };
   switch (n_u) {
     case 2:
-      cachedStripRows<2, 2>(curve_.data(), curve_dv_.data(), weights, derivatives, hair_length,
-                            inverse_length, meshes);
+      withWindow(std::integral_constant<int, 2>{});
       break;
     case 3:
-      cachedStripRows<2, 3>(curve_.data(), curve_dv_.data(), weights, derivatives, hair_length,
-                            inverse_length, meshes);
+      withWindow(std::integral_constant<int, 3>{});
       break;
     default:
-      cachedStripRows<2, 4>(curve_.data(), curve_dv_.data(), weights, derivatives, hair_length,
-                            inverse_length, meshes);
+      withWindow(std::integral_constant<int, 4>{});
       break;
   }
 #else
