@@ -59,8 +59,7 @@ int main() {
     for (int rows = 4; rows <= 7; ++rows) {
       for (int columns = 2; columns <= 3; ++columns) {
         for (int seed = 0; seed < 5; ++seed, ++g) {
-          strips.push_back(
-              {grids[g].data(), columns, rows, seed % 2 == 0 ? 10.0 : (0.03 + 0.005 * seed) * rows});
+          strips.push_back({grids[g].data(), columns, rows, seed == 4 ? 10.0 : (0.03 + 0.005 * seed) * rows});
         }
       }
     }

@@ -175,7 +175,7 @@ void HairMeshBuilder::buildStrips(std::size_t first_strip, std::size_t last_stri
   const std::vector<Ellipsoid>& bodies = *bodies_;
   // The strips are tessellated kBatch at a time in one call (four to a kernel, one per SIMD lane, where
   // they have two control columns), then finished one by one while their meshes are in cache.
-  constexpr std::size_t kBatch = 16;
+  constexpr std::size_t kBatch = 4;
   StripInput inputs[kBatch];  // (buildStrips runs on several threads at once: on the stack)
   for (std::size_t s = first_strip; s < last_strip; ++s) {
     if ((s - first_strip) % kBatch == 0) {

@@ -995,28 +995,6 @@ HAIR_SIM_AVX2_TARGET inline void storeStripLanes(const Quad3& value, double* con
 /// coordinate q (column * 3 + k) of control row r of strip l at control[4 * (6 r + q) + l].
 constexpr int kLaneControlRow = 4 * 6;
 
-/// The column curves (c) and their d/dv (d) of lane l at sample iv, coordinate q = column * 3 + k: what
-/// stripRows computes in that lane (the quads' window of K control rows from first[iv / 4], with sample iv's
-/// weights of along_weight[4 * (g * K + m) + iv % 4], in the same order).
-void laneCurvesAt(const double* control, const int* first, const double* along_weight,
-                  const double* along_derivative, int window, int iv, int l, double c[6], double d[6]) {
-  const int g = iv / 4;
-  const double* aw = along_weight + 4 * g * window + iv % 4;
-  const double* ad = along_derivative + 4 * g * window + iv % 4;
-  const double* base = control + static_cast<std::size_t>(kLaneControlRow) * first[g] + l;
-  for (int q = 0; q < 6; ++q) {
-    double value = aw[0] * base[4 * q];
-    double slope = ad[0] * base[4 * q];
-    for (int m = 1; m < window; ++m) {
-      const double x = base[4 * q + kLaneControlRow * m];
-      value += aw[4 * m] * x;
-      slope += ad[4 * m] * x;
-    }
-    c[q] = value;
-    d[q] = slope;
-  }
-}
-
 /// CachedBasis (AVX2), strips in lanes: four strips of two control columns and one row count, one strip per
 /// lane (control: kLaneControlRow), every row step all NU (2-4) vertex columns. The row's column curves are
 /// computed in the step from the quads' window of K control rows (no curve arrays: that work fills the
@@ -1061,8 +1039,13 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
   double crossing_step[NU][4][3];
   double crossing_du[NU][4][3];
   double crossing_dv[NU][4][3];
+  double crossing_curve[NU][4][6];  // the row before's column curves (and d/dv) in the lane
+  double crossing_slope[NU][4][6];
   __m256d length[NU];
   Quad3 last[NU];
+  __m256d last_curve[6] = {};  // the row before's (for a clip)
+  __m256d last_slope[6] = {};
+  const int all_crossed = 0xF;
   for (int u = 0; u < NU; ++u) {
     length[u] = _mm256_setzero_pd();
     last[u] = Quad3{};
@@ -1129,6 +1112,10 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
             crossing_du[u][l][k] = lane_du[k];
             crossing_dv[u][l][k] = lane_dv[k];
           }
+          for (int q = 0; q < 6; ++q) {
+            crossing_curve[u][l][q] = last_curve[q][l];
+            crossing_slope[u][l][q] = last_slope[q][l];
+          }
         }
         crossed[u] |= over;
       }
@@ -1155,6 +1142,18 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
       length[u] = walked;
       last[u] = p;
     }
+    for (int q = 0; q < 6; ++q) {
+      last_curve[q] = curve[q];
+      last_slope[q] = slope[q];
+    }
+    // Every column of every lane clipped: the rows below are clipColumn's alone.
+    bool done = true;
+    for (int u = 0; u < NU; ++u) {
+      done = done && crossed[u] == all_crossed;
+    }
+    if (done) {
+      break;
+    }
   }
   for (int u = 0; u < NU; ++u) {
     for (int l = 0; l < 4; ++l) {
@@ -1162,12 +1161,10 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
         continue;
       }
       // crossing_row > 0 (the root has a zero segment): the curves of the row before it.
-      double c[6];
-      double d[6];
-      laneCurvesAt(control, first, along_weight, along_derivative, K, crossing_row[u][l] - 1, l, c, d);
-      clipCachedColumn(meshes[l], u, crossing_row[u][l], c, d, 1, 0, weights[u], derivatives[u], W,
-                       crossing_previous[u][l], crossing_step[u][l], crossing_segment[u][l],
-                       crossing_length[u][l], hair_length[l], crossing_du[u][l], crossing_dv[u][l]);
+      clipCachedColumn(meshes[l], u, crossing_row[u][l], crossing_curve[u][l], crossing_slope[u][l], 1, 0,
+                       weights[u], derivatives[u], W, crossing_previous[u][l], crossing_step[u][l],
+                       crossing_segment[u][l], crossing_length[u][l], hair_length[l], crossing_du[u][l],
+                       crossing_dv[u][l]);
     }
   }
 }
