@@ -45,10 +45,15 @@ def main():
     if 'BM_Step/100' in bench and 'BM_Step/10000' in bench:
         lines += ['', 'Cost per update at 10,000 strips / at 100: %.2f x.' % (
             bench['BM_Step/100']['items_per_second'] / bench['BM_Step/10000']['items_per_second'])]
-    lines += ['', '| tessellation (default hairstyle and level of detail) | ns per vertex |', '|---|---|']
+    lines += ['', '| tessellation (default hairstyle and level of detail, in one call) | ns per vertex |', '|---|---|']
     for name in ('BM_Tessellate_CachedBasis', 'BM_Tessellate_ForwardDifferencing', 'BM_Tessellate_DeBoor'):
         if name in bench:
             lines.append('| %s | %.1f |' % (name.replace('BM_Tessellate_', ''), 1e9 / bench[name]['items_per_second']))
+    # The same hairstyle with one tessellate call per strip (no strips in SIMD lanes), from the same run.
+    if 'BM_Tessellate_CachedBasisPerStrip' in bench and 'BM_Tessellate_CachedBasis' in bench:
+        per_strip = 1e9 / bench['BM_Tessellate_CachedBasisPerStrip']['items_per_second']
+        batch = 1e9 / bench['BM_Tessellate_CachedBasis']['items_per_second']
+        lines.append('| CachedBasis, one call per strip (batch / this: %.2f x) | %.1f |' % (batch / per_strip, per_strip))
     # CachedBasis at more samples along (BM_Tessellate_CachedBasisAlong/<samples_along>): longer columns share
     # each strip's and each column's fixed work among more vertices.
     along = sorted((int(n.split('/')[1]), 1e9 / bench[n]['items_per_second']) for n in bench
