@@ -99,6 +99,31 @@ int main() {
         std::printf("overflow, level 1 x %d, %d x %d: %016llx\n", samples_along, columns, rows,
                     static_cast<unsigned long long>(hash));
       }
+      // The same in the batch form: four 2-column grids in lanes, one of them finite and short of the hair
+      // length (its walk never crosses while the others' overflow).
+      std::vector<std::vector<Vec3>> grids(4, std::vector<Vec3>(static_cast<std::size_t>(2 * rows)));
+      for (int l = 0; l < 4; ++l) {
+        for (int r = 0; r < rows; ++r) {
+          for (int c = 0; c < 2; ++c) {
+            grids[l][static_cast<std::size_t>(r * 2 + c)] =
+                l == 2 ? Vec3(0.01 * c, 0.001 * r, -0.01 * r)
+                       : Vec3(huge * (1.0 - 1e-16 * ((r * 7 + c + l) % 3)), 0.01 * r + 0.001 * c, 0.0);
+          }
+        }
+      }
+      const StripInput strips[4] = {{grids[0].data(), 2, rows, 0.5},
+                                    {grids[1].data(), 2, rows, 0.5},
+                                    {grids[2].data(), 2, rows, 0.5},
+                                    {grids[3].data(), 2, rows, 0.5}};
+      StripMesh meshes[4];
+      tessellator.tessellate(strips, 4, meshes);
+      for (int l = 0; l < 4; ++l) {
+        std::uint64_t hash = 14695981039346656037ULL;
+        hashBytes(hash, meshes[l].positions.data(), meshes[l].positions.size() * sizeof(Vec3));
+        hashBytes(hash, meshes[l].v_param.data(), meshes[l].v_param.size() * sizeof(float));
+        std::printf("overflow batch, level 1 x %d, 2 x %d, strip %d: %016llx\n", samples_along, rows, l,
+                    static_cast<unsigned long long>(hash));
+      }
     }
   }
   return 0;

@@ -59,9 +59,8 @@ enum class TessellationMethod {
   /// small linear combination of control points. Separable: the control columns' curves (and d/dv) at all
   /// v samples first, then (degree + 1) of them are combined per vertex. Exact (no accumulated error).
   /// SIMD: AVX2 (chosen at run time: three or four vertex columns in lanes, one row per step, where they
-  /// share
-  /// their control columns; else four v samples of a column) or SSE2 kernels (two v samples at once);
-  /// bit-identical to each other.
+  /// share their control columns; else four v samples of a column; in the batch form four strips of two
+  /// control columns, one per lane) or SSE2 kernels (two v samples at once); bit-identical to each other.
   CachedBasis,
 };
 
@@ -108,7 +107,7 @@ class Tessellator {
 
   /// Tessellates strips[i] into meshes[i] for i < count: the same meshes, bit for bit, as tessellate() one
   /// strip at a time. With CachedBasis on AVX2, four consecutive strips of two control columns and one row
-  /// count go through the kernels together, one strip per SIMD lane (at up to 3 samples across; 0.94 x the
+  /// count go through one kernel call, one strip per SIMD lane (at up to 3 samples across; 0.83-0.85 x the
   /// time of one call per strip on the default hairstyle). Every strip is checked first, as tessellate()
   /// checks one (the message names strip first_index + i): on a bad one it throws std::invalid_argument and
   /// no mesh is changed. Null strips or meshes with count > 0 throw as well.
