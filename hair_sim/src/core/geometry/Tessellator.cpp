@@ -1076,15 +1076,15 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
     }
     const Quad3 c[W] = {{curve[0], curve[1], curve[2]}, {curve[3], curve[4], curve[5]}};
     const Quad3 d[W] = {{slope[0], slope[1], slope[2]}, {slope[3], slope[4], slope[5]}};
+    // d/du: the same derivative weights for every vertex column (the caller's condition), so once per row.
+    const Quad3 du = plus(scaled(dw[0][0], c[0]), scaled(dw[0][1], c[1]));
 #pragma GCC unroll 8
     for (int u = 0; u < NU; ++u) {
       Quad3 p = scaled(w[u][0], c[0]);
-      Quad3 du = scaled(dw[u][0], c[0]);
       Quad3 dv = scaled(w[u][0], d[0]);
 #pragma GCC unroll 4
       for (int b = 1; b < W; ++b) {
         p = plus(p, scaled(w[u][b], c[b]));
-        du = plus(du, scaled(dw[u][b], c[b]));
         dv = plus(dv, scaled(w[u][b], d[b]));
       }
       if (iv == 0) {  // the root has no previous sample: a zero first segment
@@ -1953,9 +1953,18 @@ void Tessellator::tessellateCachedBasisLanes(const StripInput* strips, StripMesh
   }
   const double* weights[4];
   const double* derivatives[4];
+  bool same_derivative = true;  // (two control columns: one linear span, always)
   for (int iu = 0; iu < n_u; ++iu) {
     weights[iu] = across.samples[static_cast<std::size_t>(iu)].weight;
     derivatives[iu] = across.samples[static_cast<std::size_t>(iu)].derivative;
+    same_derivative =
+        same_derivative && derivatives[iu][0] == derivatives[0][0] && derivatives[iu][1] == derivatives[0][1];
+  }
+  if (!same_derivative) {
+    for (int l = 0; l < 4; ++l) {
+      tessellateCachedBasis(strips[l].control_points, columns, rows, strips[l].hair_length, meshes[l]);
+    }
+    return;
   }
   // The quads' window: 4 control rows at 4 or more samples along, up to 7 at 1.
   auto run = [&](auto kernel) {
