@@ -991,6 +991,30 @@ HAIR_SIM_AVX2_TARGET inline void storeStripLanes(const Quad3& value, double* con
   _mm_storeh_pd(out[3] + offset + 2, z_high);
 }
 
+/// out[4 * i + l] = strip[l][i] for i < count (four strips' coordinates into lanes): 4 x 4 transposes.
+HAIR_SIM_AVX2_TARGET void interleaveStrips(const double* const strip[4], std::size_t count, double* out) {
+  std::size_t i = 0;
+  for (; i + 4 <= count; i += 4) {
+    const __m256d a = _mm256_loadu_pd(strip[0] + i);
+    const __m256d b = _mm256_loadu_pd(strip[1] + i);
+    const __m256d c = _mm256_loadu_pd(strip[2] + i);
+    const __m256d d = _mm256_loadu_pd(strip[3] + i);
+    const __m256d ab_even = _mm256_unpacklo_pd(a, b);  // a0 b0 | a2 b2
+    const __m256d ab_odd = _mm256_unpackhi_pd(a, b);   // a1 b1 | a3 b3
+    const __m256d cd_even = _mm256_unpacklo_pd(c, d);
+    const __m256d cd_odd = _mm256_unpackhi_pd(c, d);
+    _mm256_storeu_pd(out + 4 * i, _mm256_permute2f128_pd(ab_even, cd_even, 0x20));
+    _mm256_storeu_pd(out + 4 * i + 4, _mm256_permute2f128_pd(ab_odd, cd_odd, 0x20));
+    _mm256_storeu_pd(out + 4 * i + 8, _mm256_permute2f128_pd(ab_even, cd_even, 0x31));
+    _mm256_storeu_pd(out + 4 * i + 12, _mm256_permute2f128_pd(ab_odd, cd_odd, 0x31));
+  }
+  for (; i < count; ++i) {
+    for (int l = 0; l < 4; ++l) {
+      out[4 * i + static_cast<std::size_t>(l)] = strip[l][i];
+    }
+  }
+}
+
 /// The control rows of four strips of two control columns in lanes (Tessellator::tessellateCachedBasisLanes):
 /// coordinate q (column * 3 + k) of control row r of strip l at control[4 * (6 r + q) + l].
 constexpr int kLaneControlRow = 4 * 6;
@@ -1938,12 +1962,9 @@ void Tessellator::tessellateCachedBasisLanes(const StripInput* strips, StripMesh
   if (lane_control_.size() < 4 * coordinates) {
     lane_control_.resize(4 * coordinates);
   }
-  for (int l = 0; l < 4; ++l) {
-    const double* control = strips[l].control_points->data();
-    for (std::size_t i = 0; i < coordinates; ++i) {
-      lane_control_[4 * i + static_cast<std::size_t>(l)] = control[i];
-    }
-  }
+  const double* const control[4] = {strips[0].control_points->data(), strips[1].control_points->data(),
+                                    strips[2].control_points->data(), strips[3].control_points->data()};
+  interleaveStrips(control, coordinates, lane_control_.data());
   const LaneGroups& groups = along.quads;
   double hair_length[4];
   double inverse_length[4];
