@@ -294,13 +294,17 @@ void validateLevel(const LevelOfDetail& level, const char* where) {
   }
 }
 
+/// "where :" or "where : strip N :" (strip >= 0), the start of the checks' messages.
+std::string messagePrefix(const char* where, long long strip) {
+  return std::string(where) + (strip >= 0 ? " : strip " + std::to_string(strip) + " :" : std::string(" :"));
+}
+
 /// Throws when the grid is too small; `strip` >= 0 is named in the message.
 void validateShape(int columns, int rows, const char* where, long long strip = -1) {
   if (columns >= 2 && rows >= 4) {
     return;
   }
-  const std::string prefix =
-      std::string(where) + (strip >= 0 ? " : strip " + std::to_string(strip) + " :" : std::string(" :"));
+  const std::string prefix = messagePrefix(where, strip);
   if (columns < 2) {
     throw std::invalid_argument(prefix + " columns must be >= 2, got " + std::to_string(columns));
   }
@@ -310,9 +314,7 @@ void validateShape(int columns, int rows, const char* where, long long strip = -
 /// tessellate()'s checks of one strip; `strip` >= 0 is named in the message.
 void checkStrip(const Vec3* control_points, int columns, int rows, double hair_length, const char* where,
                 long long strip) {
-  auto prefix = [where, strip] {  // only on the way to a throw
-    return std::string(where) + (strip >= 0 ? " : strip " + std::to_string(strip) + " :" : std::string(" :"));
-  };
+  auto prefix = [where, strip] { return messagePrefix(where, strip); };  // only on the way to a throw
   if (control_points == nullptr) {
     throw std::invalid_argument(prefix() + " control_points is null");
   }
