@@ -1022,17 +1022,18 @@ HAIR_SIM_AVX2_TARGET void interleaveStrips(const double* const strip[4], std::si
 constexpr int kLaneControlRow = 4 * 6;
 
 /// CachedBasis (AVX2), strips in lanes: four strips of two control columns and one row count, one strip per
-/// lane (control: kLaneControlRow), every row step all NU (2-4) vertex columns. The row's column curves are
-/// computed in the step from the quads' window of K control rows (no curve arrays: that work fills the
-/// ports the square roots and divisions leave idle), then shared by the NU columns, whose length walks are
-/// independent chains; no lane idles (cachedRowQuads, with one strip's three columns in lanes, leaves one of
-/// four). Each lane computes what columnCurveQuads, then cachedRowQuads or cachedColumnQuads compute for its
-/// strip's column, in the same order; a lane that crosses its hair length has its column finished by
-/// clipColumn after the last row.
+/// lane (control: kLaneControlRow), every row step all NU (2-4) vertex columns. Two control columns make one
+/// linear span across, whose derivative weights (`derivative`) are the same at every vertex column. The row's
+/// column curves are computed in the step from the quads' window of K control rows (no curve arrays: that
+/// work fills the ports the square roots and divisions leave idle), then shared by the NU columns, whose
+/// length walks are independent chains; no lane idles (cachedRowQuads, with one strip's three columns in
+/// lanes, leaves one of four). Each lane computes what columnCurveQuads, then cachedRowQuads or
+/// cachedColumnQuads compute for its strip's column, in the same order; a lane that crosses its hair length
+/// has its column finished by clipColumn after the last row.
 template <int K, int NU>
 HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, const double* along_weight,
                                     const double* along_derivative, const double* const* weights,
-                                    const double* const* derivatives, const double* hair_length,
+                                    const double* derivative, const double* hair_length,
                                     const double* inverse_length, StripMesh* meshes) {
   constexpr int W = 2;
   const int n_v = meshes[0].n_v;
@@ -1048,13 +1049,12 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
     v_param[l] = arrays.v_param;
   }
   __m256d w[NU][W];
-  __m256d dw[NU][W];
   for (int u = 0; u < NU; ++u) {
     for (int b = 0; b < W; ++b) {
       w[u][b] = _mm256_set1_pd(weights[u][b]);
-      dw[u][b] = _mm256_set1_pd(derivatives[u][b]);
     }
   }
+  const __m256d dw[W] = {_mm256_set1_pd(derivative[0]), _mm256_set1_pd(derivative[1])};
   const __m256d limit = _mm256_loadu_pd(hair_length);
   const __m256d inverse = _mm256_loadu_pd(inverse_length);
   int crossed[NU] = {};
@@ -1102,8 +1102,8 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
     }
     const Quad3 c[W] = {{curve[0], curve[1], curve[2]}, {curve[3], curve[4], curve[5]}};
     const Quad3 d[W] = {{slope[0], slope[1], slope[2]}, {slope[3], slope[4], slope[5]}};
-    // d/du: the same derivative weights for every vertex column (the caller's condition), so once per row.
-    const Quad3 du = plus(scaled(dw[0][0], c[0]), scaled(dw[0][1], c[1]));
+    // d/du: one linear span across, the same derivative weights at every vertex column, so once per row.
+    const Quad3 du = plus(scaled(dw[0], c[0]), scaled(dw[1], c[1]));
 #pragma GCC unroll 8
     for (int u = 0; u < NU; ++u) {
       Quad3 p = scaled(w[u][0], c[0]);
@@ -1188,7 +1188,7 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
       }
       // crossing_row > 0 (the root has a zero segment): the curves of the row before it.
       clipCachedColumn(meshes[l], u, crossing_row[u][l], crossing_curve[u][l], crossing_slope[u][l], 1, 0,
-                       weights[u], derivatives[u], W, crossing_previous[u][l], crossing_step[u][l],
+                       weights[u], derivative, W, crossing_previous[u][l], crossing_step[u][l],
                        crossing_segment[u][l], crossing_length[u][l], hair_length[l], crossing_du[u][l],
                        crossing_dv[u][l]);
     }
@@ -1975,24 +1975,16 @@ void Tessellator::tessellateCachedBasisLanes(const StripInput* strips, StripMesh
     inverse_length[l] = 1.0 / strips[l].hair_length;
   }
   const double* weights[4];
-  const double* derivatives[4];
-  bool same_derivative = true;  // (two control columns: one linear span, always)
   for (int iu = 0; iu < n_u; ++iu) {
     weights[iu] = across.samples[static_cast<std::size_t>(iu)].weight;
-    derivatives[iu] = across.samples[static_cast<std::size_t>(iu)].derivative;
-    same_derivative =
-        same_derivative && derivatives[iu][0] == derivatives[0][0] && derivatives[iu][1] == derivatives[0][1];
   }
-  if (!same_derivative) {
-    for (int l = 0; l < 4; ++l) {
-      tessellateCachedBasis(strips[l].control_points, columns, rows, strips[l].hair_length, meshes[l]);
-    }
-    return;
-  }
+  // (One linear span across: every sample's derivative weights are sample 0's. The batch tests compare with
+  // the per-strip kernels, which take each sample's own.)
+  const double* derivative = across.samples.front().derivative;
   // The quads' window: 4 control rows at 4 or more samples along, up to 7 at 1.
   auto run = [&](auto kernel) {
     kernel(lane_control_.data(), groups.first.data(), groups.weight.data(), groups.derivative.data(), weights,
-           derivatives, hair_length, inverse_length, meshes);
+           derivative, hair_length, inverse_length, meshes);
   };
   auto withWindow = [&](auto nu) {
     constexpr int NU = decltype(nu)::value;
@@ -2023,10 +2015,8 @@ void Tessellator::tessellateCachedBasisLanes(const StripInput* strips, StripMesh
       break;
   }
 #else
-  for (int l = 0; l < 4; ++l) {
-    tessellateCachedBasis(strips[l].control_points, strips[l].columns, strips[l].rows, strips[l].hair_length,
-                          meshes[l]);
-  }
+  (void)strips;  // only called where the AVX2 kernels are compiled
+  (void)meshes;
 #endif
 }
 
