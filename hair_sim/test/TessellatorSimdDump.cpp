@@ -99,7 +99,7 @@ int main() {
         std::printf("overflow, level 1 x %d, %d x %d: %016llx\n", samples_along, columns, rows,
                     static_cast<unsigned long long>(hash));
       }
-      // The same in the batch form: four 2-column grids in lanes, one of them finite and short of the hair
+      // The same in the batch form: four different 2-column grids in lanes, one of them short of the hair
       // length (its walk never crosses while the others' overflow).
       std::vector<std::vector<Vec3>> grids(4, std::vector<Vec3>(static_cast<std::size_t>(2 * rows)));
       for (int l = 0; l < 4; ++l) {
@@ -107,7 +107,8 @@ int main() {
           for (int c = 0; c < 2; ++c) {
             grids[l][static_cast<std::size_t>(r * 2 + c)] =
                 l == 2 ? Vec3(0.01 * c, 0.001 * r, -0.01 * r)
-                       : Vec3(huge * (1.0 - 1e-16 * ((r * 7 + c + l) % 3)), 0.01 * r + 0.001 * c, 0.0);
+                       : Vec3(huge * (1.0 - 1e-16 * ((r * 7 + c + l) % 3)) * (l == 3 ? 0.5 : 1.0),
+                              0.01 * r + 0.001 * c, 0.0);
           }
         }
       }
