@@ -1,12 +1,16 @@
-/// Tessellation cost per vertex of the three methods on a synthetic 100-strip hairstyle (2 x 5 control
-/// points per strip, curved, hair length 0.25-0.4 m) at the default level of detail. items_per_second
+/// Tessellation cost per vertex of the three methods on the default hairstyle
+/// (config/hairstyles/default.yaml: 100 strips of 2 x 5 control points; in two columns of three the hair
+/// length ends in the last span, so the column is clipped there) at the default level of detail, and
+/// CachedBasis on a synthetic hairstyle of the same shape whose columns are never clipped. items_per_second
 /// counts vertices, so 1e9 / items_per_second is the time per vertex in ns.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "hair_sim/core/geometry/Tessellator.hpp"
+#include "hair_sim/core/model/HairstyleIO.hpp"
 
 namespace {
 
@@ -19,14 +23,17 @@ using hair_sim::Vec3;
 struct SyntheticStrip {
   std::vector<Vec3> points;
   double hair_length = 0.0;
+  int columns = 2;
+  int rows = 5;
 };
 
 constexpr int kStrips = 100;
 constexpr int kColumns = 2;
 constexpr int kRows = 5;
 
-/// Strips rooted on a 0.1 m sphere, hanging down and outwards with a bend; deterministic.
-std::vector<SyntheticStrip> makeHairstyle() {
+/// Strips rooted on a 0.1 m sphere, hanging down and outwards with a bend; deterministic. Each hair length
+/// is the length of its control polygon, longer than the surface's columns: nothing is clipped.
+std::vector<SyntheticStrip> syntheticHairstyle() {
   std::vector<SyntheticStrip> strips(kStrips);
   const double pi = std::acos(-1.0);
   for (int i = 0; i < kStrips; ++i) {
@@ -55,24 +62,38 @@ std::vector<SyntheticStrip> makeHairstyle() {
   return strips;
 }
 
+/// The default hairstyle (the node's, from config/).
+std::vector<SyntheticStrip> defaultHairstyle() {
+  const hair_sim::Hairstyle hairstyle =
+      hair_sim::loadHairstyle(std::string(HAIR_SIM_REPO_ROOT) + "/config/hairstyles/default.yaml");
+  std::vector<SyntheticStrip> strips;
+  for (const hair_sim::Strip& strip : hairstyle.strips) {
+    strips.push_back({strip.points, strip.hair_length});
+    strips.back().columns = strip.columns;
+    strips.back().rows = strip.rows;
+  }
+  return strips;
+}
+
 /// The hairstyle in one call (the batch form of tessellate, as HairMeshBuilder calls it), or with
 /// per_strip one call per strip.
-void runTessellation(benchmark::State& state, TessellationMethod method, LevelOfDetail level = {},
-                     bool per_strip = false) {
-  const std::vector<SyntheticStrip> strips = makeHairstyle();
+void runTessellation(benchmark::State& state, const std::vector<SyntheticStrip>& strips,
+                     TessellationMethod method, LevelOfDetail level = {}, bool per_strip = false) {
   Tessellator tessellator(level, method);
   std::vector<StripMesh> meshes(strips.size());
   std::vector<hair_sim::StripInput> inputs(strips.size());
   std::int64_t vertices = 0;
   for (std::size_t i = 0; i < strips.size(); ++i) {  // warm caches and mesh storage
-    tessellator.tessellate(strips[i].points, kColumns, kRows, strips[i].hair_length, meshes[i]);
+    const SyntheticStrip& strip = strips[i];
+    tessellator.tessellate(strip.points, strip.columns, strip.rows, strip.hair_length, meshes[i]);
     vertices += meshes[i].vertexCount();
-    inputs[i] = {strips[i].points.data(), kColumns, kRows, strips[i].hair_length};
+    inputs[i] = {strip.points.data(), strip.columns, strip.rows, strip.hair_length};
   }
   for (auto _ : state) {
     if (per_strip) {
-      for (std::size_t i = 0; i < strips.size(); ++i) {
-        tessellator.tessellate(strips[i].points.data(), kColumns, kRows, strips[i].hair_length, meshes[i]);
+      for (const hair_sim::StripInput& in : inputs) {
+        tessellator.tessellate(in.control_points, in.columns, in.rows, in.hair_length,
+                               meshes[static_cast<std::size_t>(&in - inputs.data())]);
       }
     } else {
       tessellator.tessellate(inputs.data(), inputs.size(), meshes.data());
@@ -85,15 +106,22 @@ void runTessellation(benchmark::State& state, TessellationMethod method, LevelOf
 }
 
 void BM_Tessellate_ForwardDifferencing(benchmark::State& state) {
-  runTessellation(state, TessellationMethod::ForwardDifferencing);
+  runTessellation(state, defaultHairstyle(), TessellationMethod::ForwardDifferencing);
 }
-void BM_Tessellate_DeBoor(benchmark::State& state) { runTessellation(state, TessellationMethod::DeBoor); }
+void BM_Tessellate_DeBoor(benchmark::State& state) {
+  runTessellation(state, defaultHairstyle(), TessellationMethod::DeBoor);
+}
 void BM_Tessellate_CachedBasis(benchmark::State& state) {
-  runTessellation(state, TessellationMethod::CachedBasis);
+  runTessellation(state, defaultHairstyle(), TessellationMethod::CachedBasis);
 }
 /// CachedBasis one strip per call (no strips in lanes).
 void BM_Tessellate_CachedBasisPerStrip(benchmark::State& state) {
-  runTessellation(state, TessellationMethod::CachedBasis, {}, true);
+  runTessellation(state, defaultHairstyle(), TessellationMethod::CachedBasis, {}, true);
+}
+/// CachedBasis on the synthetic hairstyle, whose columns are never clipped (the benchmarks' hairstyle until
+/// 2026-11-26).
+void BM_Tessellate_CachedBasisUnclipped(benchmark::State& state) {
+  runTessellation(state, syntheticHairstyle(), TessellationMethod::CachedBasis);
 }
 
 /// CachedBasis at samples_along = the argument (the default level of detail has 4): the cost per vertex of
@@ -101,13 +129,14 @@ void BM_Tessellate_CachedBasisPerStrip(benchmark::State& state) {
 void BM_Tessellate_CachedBasisAlong(benchmark::State& state) {
   LevelOfDetail level;
   level.samples_along = static_cast<int>(state.range(0));
-  runTessellation(state, TessellationMethod::CachedBasis, level);
+  runTessellation(state, defaultHairstyle(), TessellationMethod::CachedBasis, level);
 }
 
 BENCHMARK(BM_Tessellate_ForwardDifferencing);
 BENCHMARK(BM_Tessellate_DeBoor);
 BENCHMARK(BM_Tessellate_CachedBasis);
 BENCHMARK(BM_Tessellate_CachedBasisPerStrip);
+BENCHMARK(BM_Tessellate_CachedBasisUnclipped);
 BENCHMARK(BM_Tessellate_CachedBasisAlong)->Arg(4)->Arg(8)->Arg(16)->Arg(32);
 
 }  // namespace
