@@ -993,6 +993,15 @@ HAIR_SIM_AVX2_TARGET inline void storeStripLanes(const Quad3& value, double* con
   _mm_storeh_pd(out[3] + offset + 2, z_high);
 }
 
+/// Lanes of `crossing` (all bits set): from + fraction * (to - from), clipColumn's interpolation; the others:
+/// at.
+HAIR_SIM_AVX2_TARGET inline Quad3 clippedLanes(const Quad3& at, const Quad3& from, const Quad3& to,
+                                               __m256d fraction, __m256d crossing) {
+  return {_mm256_blendv_pd(at.x, from.x + fraction * (to.x - from.x), crossing),
+          _mm256_blendv_pd(at.y, from.y + fraction * (to.y - from.y), crossing),
+          _mm256_blendv_pd(at.z, from.z + fraction * (to.z - from.z), crossing)};
+}
+
 /// out[4 * i + l] = strip[l][i] for i < count (four strips' coordinates into lanes): 4 x 4 transposes.
 HAIR_SIM_AVX2_TARGET void interleaveStrips(const double* const strip[4], std::size_t count, double* out) {
   std::size_t i = 0;
@@ -1013,6 +1022,114 @@ HAIR_SIM_AVX2_TARGET void interleaveStrips(const double* const strip[4], std::si
   for (; i < count; ++i) {
     for (int l = 0; l < 4; ++l) {
       out[4 * i + static_cast<std::size_t>(l)] = strip[l][i];
+    }
+  }
+}
+
+/// stripRows' record of the rows where a column's hair length ends, one array of lanes per value (lane l of
+/// value q of column u at [u][q][l], written by masked stores as the lanes cross): the row before's vertex
+/// (3), the step to this row's (3), this row's raw derivatives d/du (3) and d/dv (3), the row before's column
+/// curves and their d/dv (6 + 6, kLaneControlRow order), the walked length before the step and the step's
+/// length.
+enum ClipValue {
+  kClipLast = 0,
+  kClipStep = 3,
+  kClipDu = 6,
+  kClipDv = 9,
+  kClipCurve = 12,
+  kClipSlope = 18,
+  kClipLength = 24,
+  kClipSegment = 25,
+  kClipValues = 26
+};
+
+/// The lanes of bits `over` as a mask (all bits set per lane).
+HAIR_SIM_AVX2_TARGET inline __m256i laneMask(int over) {
+  const __m256i lane_bit = _mm256_set_epi64x(8, 4, 2, 1);
+  return _mm256_cmpeq_epi64(_mm256_and_si256(_mm256_set1_epi64x(over), lane_bit), lane_bit);
+}
+
+/// Lanes of `mask` of value into at[0..3] (the other lanes keep theirs): by a blend, as AVX2's masked store
+/// is slow on some CPUs (microcoded on AMD's).
+HAIR_SIM_AVX2_TARGET inline void storeMaskedLanes(double* at, __m256d mask, __m256d value) {
+  _mm256_storeu_pd(at, _mm256_blendv_pd(_mm256_loadu_pd(at), value, mask));
+}
+
+HAIR_SIM_AVX2_TARGET inline void storeMaskedQuad3(double* out, __m256d mask, const Quad3& value) {
+  storeMaskedLanes(out, mask, value.x);
+  storeMaskedLanes(out + 4, mask, value.y);
+  storeMaskedLanes(out + 8, mask, value.z);
+}
+
+HAIR_SIM_AVX2_TARGET inline Quad3 loadLanes3(const double* at) {
+  return {_mm256_loadu_pd(at), _mm256_loadu_pd(at + 4), _mm256_loadu_pd(at + 8)};
+}
+
+/// clipColumn and normalizeColumnFrom for vertex column u of the lanes of bits `crossed` (the same
+/// arithmetic, in lanes), from stripRows' record (ClipValue): the vertex moves back along the step to the
+/// hair length, the raw derivatives are interpolated from the row before's (as derivativesAt computes them
+/// from that row's curves: crossing rows are > 0, the root's step being zero), and every row from the
+/// crossing row down repeats the vertex, its unit frame and v = 1.
+HAIR_SIM_AVX2_TARGET inline __attribute__((always_inline)) void clipStripColumn(
+    const double (*record)[4], int crossed, const int* crossing_row, int u, int n_u, __m256d hair_length,
+    const __m256d* derivative, const __m256d* weight, StripMesh* meshes) {
+  const __m256d crossing = _mm256_castsi256_pd(laneMask(crossed));
+  const __m256d fraction =
+      (hair_length - _mm256_loadu_pd(record[kClipLength])) / _mm256_loadu_pd(record[kClipSegment]);
+  const Quad3 last = loadLanes3(record[kClipLast]);
+  const Quad3 step = loadLanes3(record[kClipStep]);
+  const Quad3 du = loadLanes3(record[kClipDu]);
+  const Quad3 dv = loadLanes3(record[kClipDv]);
+  __m256d curve[6];
+  __m256d slope[6];
+  for (int q = 0; q < 6; ++q) {
+    curve[q] = _mm256_loadu_pd(record[kClipCurve + q]);
+    slope[q] = _mm256_loadu_pd(record[kClipSlope + q]);
+  }
+  const __m256d zero = _mm256_setzero_pd();
+  const Quad3 previous_du{zero + derivative[0] * curve[0] + derivative[1] * curve[3],
+                          zero + derivative[0] * curve[1] + derivative[1] * curve[4],
+                          zero + derivative[0] * curve[2] + derivative[1] * curve[5]};
+  const Quad3 previous_dv{zero + weight[0] * slope[0] + weight[1] * slope[3],
+                          zero + weight[0] * slope[1] + weight[1] * slope[4],
+                          zero + weight[0] * slope[2] + weight[1] * slope[5]};
+  const Quad3 position{last.x + fraction * step.x, last.y + fraction * step.y, last.z + fraction * step.z};
+  // The lanes not crossing hold no record: a unit frame there, so that unitFrames4 judges only the others.
+  const __m256d one = _mm256_set1_pd(1.0);
+  const Quad3 clip_du{_mm256_blendv_pd(one, previous_du.x + fraction * (du.x - previous_du.x), crossing),
+                      _mm256_blendv_pd(zero, previous_du.y + fraction * (du.y - previous_du.y), crossing),
+                      _mm256_blendv_pd(zero, previous_du.z + fraction * (du.z - previous_du.z), crossing)};
+  const Quad3 clip_dv{_mm256_blendv_pd(zero, previous_dv.x + fraction * (dv.x - previous_dv.x), crossing),
+                      _mm256_blendv_pd(one, previous_dv.y + fraction * (dv.y - previous_dv.y), crossing),
+                      _mm256_blendv_pd(zero, previous_dv.z + fraction * (dv.z - previous_dv.z), crossing)};
+  Quad3 n;
+  Quad3 t;
+  const bool unit = unitFrames4(clip_du, clip_dv, n, t);
+  alignas(32) double lanes[9][4];
+  const Quad3* values[3] = {&position, unit ? &n : &clip_du, unit ? &t : &clip_dv};
+  for (int v = 0; v < 3; ++v) {
+    _mm256_store_pd(lanes[3 * v], values[v]->x);
+    _mm256_store_pd(lanes[3 * v + 1], values[v]->y);
+    _mm256_store_pd(lanes[3 * v + 2], values[v]->z);
+  }
+  for (int l = 0; l < 4; ++l) {
+    if (!(crossed & (1 << l))) {
+      continue;
+    }
+    StripMesh& mesh = meshes[l];
+    const std::size_t from = static_cast<std::size_t>(crossing_row[l]) * static_cast<std::size_t>(n_u) +
+                             static_cast<std::size_t>(u);
+    Vec3 normal(lanes[3][l], lanes[4][l], lanes[5][l]);
+    Vec3 tangent(lanes[6][l], lanes[7][l], lanes[8][l]);
+    if (!unit) {
+      normalizeFrame(normal.data(), tangent.data());
+    }
+    const Vec3 vertex(lanes[0][l], lanes[1][l], lanes[2][l]);
+    for (std::size_t at = from; at < mesh.positions.size(); at += static_cast<std::size_t>(n_u)) {
+      mesh.positions[at] = vertex;
+      mesh.normals[at] = normal;
+      mesh.tangents[at] = tangent;
+      mesh.v_param[at] = 1.0f;
     }
   }
 }
@@ -1059,17 +1176,10 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
   const __m256d inverse = _mm256_loadu_pd(inverse_length);
   int crossed[NU] = {};
   int crossing_row[NU][4] = {};
-  double crossing_length[NU][4];
-  double crossing_segment[NU][4];
-  double crossing_previous[NU][4][3];
-  double crossing_step[NU][4][3];
-  double crossing_du[NU][4][3];
-  double crossing_dv[NU][4][3];
-  double crossing_curve[NU][4][6];  // the row before's column curves (and d/dv) in the lane
-  double crossing_slope[NU][4][6];
   __m256d length[NU];
   Quad3 last[NU];
-  __m256d last_curve[6] = {};  // the row before's (for a clip)
+  double record[NU][kClipValues][4];  // (lanes written as they cross, read only for those: no initial value)
+  __m256d last_curve[6] = {};         // the row before's (for a clip)
   __m256d last_slope[6] = {};
   const int all_crossed = 0xF;
   for (int u = 0; u < NU; ++u) {
@@ -1120,27 +1230,22 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
       const __m256d segment = _mm256_sqrt_pd(dot4(step, step));
       const __m256d walked = length[u] + segment;
       const int over = _mm256_movemask_pd(_mm256_cmp_pd(walked, limit, _CMP_GT_OQ)) & ~crossed[u];
-      if (over != 0) {  // rare: once per lane and column at most
+      if (over != 0) {  // once per lane and column at most: the hair length ends in this row's segment
+        const __m256d mask = _mm256_castsi256_pd(laneMask(over));
+        double(*at)[4] = record[u];
+        storeMaskedQuad3(at[kClipLast], mask, last[u]);
+        storeMaskedQuad3(at[kClipStep], mask, step);
+        storeMaskedQuad3(at[kClipDu], mask, du);
+        storeMaskedQuad3(at[kClipDv], mask, dv);
+        for (int q = 0; q < 6; ++q) {
+          storeMaskedLanes(at[kClipCurve + q], mask, last_curve[q]);
+          storeMaskedLanes(at[kClipSlope + q], mask, last_slope[q]);
+        }
+        storeMaskedLanes(at[kClipLength], mask, length[u]);
+        storeMaskedLanes(at[kClipSegment], mask, segment);
         for (int l = 0; l < 4; ++l) {
-          if (!(over & (1 << l))) {
-            continue;
-          }
-          crossing_row[u][l] = iv;
-          crossing_segment[u][l] = segment[l];
-          crossing_length[u][l] = length[u][l];
-          const double previous[3] = {last[u].x[l], last[u].y[l], last[u].z[l]};
-          const double lane_step[3] = {step.x[l], step.y[l], step.z[l]};
-          const double lane_du[3] = {du.x[l], du.y[l], du.z[l]};
-          const double lane_dv[3] = {dv.x[l], dv.y[l], dv.z[l]};
-          for (int k = 0; k < 3; ++k) {
-            crossing_previous[u][l][k] = previous[k];
-            crossing_step[u][l][k] = lane_step[k];
-            crossing_du[u][l][k] = lane_du[k];
-            crossing_dv[u][l][k] = lane_dv[k];
-          }
-          for (int q = 0; q < 6; ++q) {
-            crossing_curve[u][l][q] = last_curve[q][l];
-            crossing_slope[u][l][q] = last_slope[q][l];
+          if (over & (1 << l)) {
+            crossing_row[u][l] = iv;
           }
         }
         crossed[u] |= over;
@@ -1172,7 +1277,7 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
       last_curve[q] = curve[q];
       last_slope[q] = slope[q];
     }
-    // Every column of every lane clipped: the rows below are clipColumn's alone.
+    // Every column of every lane clipped: the rows below only repeat the clipped vertices.
     bool done = true;
     for (int u = 0; u < NU; ++u) {
       done = done && crossed[u] == all_crossed;
@@ -1182,15 +1287,8 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
     }
   }
   for (int u = 0; u < NU; ++u) {
-    for (int l = 0; l < 4; ++l) {
-      if (!(crossed[u] & (1 << l))) {
-        continue;
-      }
-      // crossing_row > 0 (the root has a zero segment): the curves of the row before it.
-      clipCachedColumn(meshes[l], u, crossing_row[u][l], crossing_curve[u][l], crossing_slope[u][l], 1, 0,
-                       weights[u], derivative, W, crossing_previous[u][l], crossing_step[u][l],
-                       crossing_segment[u][l], crossing_length[u][l], hair_length[l], crossing_du[u][l],
-                       crossing_dv[u][l]);
+    if (crossed[u] != 0) {
+      clipStripColumn(record[u], crossed[u], crossing_row[u], u, NU, limit, dw, w[u], meshes);
     }
   }
 }
