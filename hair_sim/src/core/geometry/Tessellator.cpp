@@ -695,6 +695,122 @@ HAIR_SIM_AVX2_TARGET inline void storeFloatLanes(__m128 value, float* out, std::
   }
 }
 
+/// stripRows' record of the rows where a lane's walk crosses the hair length, one array of lanes per
+/// value (lane l of value q at [q][l], written by blends as the lanes cross): the row before's vertex (3),
+/// the step to this row's (3), this row's raw derivatives d/du and d/dv (3 + 3), the row before's (3 + 3, as
+/// derivativesAt computes them), the walked length before the step and the step's length.
+enum ClipValue {
+  kClipLast = 0,
+  kClipStep = 3,
+  kClipDu = 6,
+  kClipDv = 9,
+  kClipPreviousDu = 12,
+  kClipPreviousDv = 15,
+  kClipLength = 18,
+  kClipSegment = 19,
+  kClipValues = 20
+};
+
+/// The lanes of bits `over` as a mask (all bits set per lane).
+HAIR_SIM_AVX2_TARGET inline __m256d laneMask(int over) {
+  const __m256i lane_bit = _mm256_set_epi64x(8, 4, 2, 1);
+  return _mm256_castsi256_pd(
+      _mm256_cmpeq_epi64(_mm256_and_si256(_mm256_set1_epi64x(over), lane_bit), lane_bit));
+}
+
+/// Lanes of `mask` of value into at[0..3], the other lanes keeping theirs, or every lane where `first` (the
+/// record holds nothing yet): by a blend, as AVX2's masked store is slow on some CPUs (microcoded on AMD's).
+HAIR_SIM_AVX2_TARGET inline void storeMaskedLanes(double* at, __m256d mask, __m256d value, bool first) {
+  _mm256_storeu_pd(at, first ? value : _mm256_blendv_pd(_mm256_loadu_pd(at), value, mask));
+}
+
+HAIR_SIM_AVX2_TARGET inline void storeMaskedQuad3(double (*at)[4], __m256d mask, const Quad3& value,
+                                                  bool first) {
+  storeMaskedLanes(at[0], mask, value.x, first);
+  storeMaskedLanes(at[1], mask, value.y, first);
+  storeMaskedLanes(at[2], mask, value.z, first);
+}
+
+HAIR_SIM_AVX2_TARGET inline Quad3 loadQuad3Lanes(const double (*at)[4]) {
+  return {_mm256_loadu_pd(at[0]), _mm256_loadu_pd(at[1]), _mm256_loadu_pd(at[2])};
+}
+
+/// Records the lanes of bits `over` (ClipValue) in `record`. `first`: the record holds no lane yet, so every
+/// lane is written (the others are overwritten as they cross, or never read).
+HAIR_SIM_AVX2_TARGET inline void recordCrossing(double (*record)[4], int over, bool first, const Quad3& last,
+                                                const Quad3& step, const Quad3& du, const Quad3& dv,
+                                                const Quad3& previous_du, const Quad3& previous_dv,
+                                                __m256d length, __m256d segment) {
+  const __m256d mask = laneMask(over);
+  storeMaskedQuad3(record + kClipLast, mask, last, first);
+  storeMaskedQuad3(record + kClipStep, mask, step, first);
+  storeMaskedQuad3(record + kClipDu, mask, du, first);
+  storeMaskedQuad3(record + kClipDv, mask, dv, first);
+  storeMaskedQuad3(record + kClipPreviousDu, mask, previous_du, first);
+  storeMaskedQuad3(record + kClipPreviousDv, mask, previous_dv, first);
+  storeMaskedLanes(record[kClipLength], mask, length, first);
+  storeMaskedLanes(record[kClipSegment], mask, segment, first);
+}
+
+/// clipColumn and normalizeColumnFrom for the lanes of bits `crossed` (the same arithmetic, in lanes), from
+/// their record (ClipValue): the vertex moves back along the step to the hair length, the raw derivatives are
+/// interpolated from the row before's, and every row of the lane's column (column[l] of mesh[l]) from its
+/// crossing row down repeats the vertex, its unit frame and v = 1.
+HAIR_SIM_AVX2_TARGET inline __attribute__((always_inline)) void clipLanes(
+    const double (*record)[4], int crossed, const int* crossing_row, __m256d hair_length,
+    StripMesh* const* mesh, const int* column) {
+  const __m256d crossing = laneMask(crossed);
+  const __m256d fraction =
+      (hair_length - _mm256_loadu_pd(record[kClipLength])) / _mm256_loadu_pd(record[kClipSegment]);
+  const Quad3 last = loadQuad3Lanes(record + kClipLast);
+  const Quad3 step = loadQuad3Lanes(record + kClipStep);
+  const Quad3 du = loadQuad3Lanes(record + kClipDu);
+  const Quad3 dv = loadQuad3Lanes(record + kClipDv);
+  const Quad3 previous_du = loadQuad3Lanes(record + kClipPreviousDu);
+  const Quad3 previous_dv = loadQuad3Lanes(record + kClipPreviousDv);
+  const Quad3 position{last.x + fraction * step.x, last.y + fraction * step.y, last.z + fraction * step.z};
+  // The lanes not crossing hold no record: a unit frame there, so that unitFrames4 judges only the others.
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d one = _mm256_set1_pd(1.0);
+  const Quad3 clip_du{_mm256_blendv_pd(one, previous_du.x + fraction * (du.x - previous_du.x), crossing),
+                      _mm256_blendv_pd(zero, previous_du.y + fraction * (du.y - previous_du.y), crossing),
+                      _mm256_blendv_pd(zero, previous_du.z + fraction * (du.z - previous_du.z), crossing)};
+  const Quad3 clip_dv{_mm256_blendv_pd(zero, previous_dv.x + fraction * (dv.x - previous_dv.x), crossing),
+                      _mm256_blendv_pd(one, previous_dv.y + fraction * (dv.y - previous_dv.y), crossing),
+                      _mm256_blendv_pd(zero, previous_dv.z + fraction * (dv.z - previous_dv.z), crossing)};
+  Quad3 n;
+  Quad3 t;
+  const bool unit = unitFrames4(clip_du, clip_dv, n, t);
+  alignas(32) double lanes[9][4];
+  const Quad3* values[3] = {&position, unit ? &n : &clip_du, unit ? &t : &clip_dv};
+  for (int v = 0; v < 3; ++v) {
+    _mm256_store_pd(lanes[3 * v], values[v]->x);
+    _mm256_store_pd(lanes[3 * v + 1], values[v]->y);
+    _mm256_store_pd(lanes[3 * v + 2], values[v]->z);
+  }
+  for (int l = 0; l < 4; ++l) {
+    if (!(crossed & (1 << l))) {
+      continue;
+    }
+    StripMesh& m = *mesh[l];
+    const std::size_t n_u = static_cast<std::size_t>(m.n_u);
+    Vec3 normal(lanes[3][l], lanes[4][l], lanes[5][l]);
+    Vec3 tangent(lanes[6][l], lanes[7][l], lanes[8][l]);
+    if (!unit) {
+      normalizeFrame(normal.data(), tangent.data());
+    }
+    const Vec3 vertex(lanes[0][l], lanes[1][l], lanes[2][l]);
+    for (std::size_t at =
+             static_cast<std::size_t>(crossing_row[l]) * n_u + static_cast<std::size_t>(column[l]);
+         at < m.positions.size(); at += n_u) {
+      m.positions[at] = vertex;
+      m.normals[at] = normal;
+      m.tangents[at] = tangent;
+      m.v_param[at] = 1.0f;
+    }
+  }
+}
+
 /// CachedBasis stage 1 (AVX2): as columnCurvePairs with four samples per step, reading the control points
 /// directly (broadcast loads).
 template <int K>
@@ -993,15 +1109,6 @@ HAIR_SIM_AVX2_TARGET inline void storeStripLanes(const Quad3& value, double* con
   _mm_storeh_pd(out[3] + offset + 2, z_high);
 }
 
-/// Lanes of `crossing` (all bits set): from + fraction * (to - from), clipColumn's interpolation; the others:
-/// at.
-HAIR_SIM_AVX2_TARGET inline Quad3 clippedLanes(const Quad3& at, const Quad3& from, const Quad3& to,
-                                               __m256d fraction, __m256d crossing) {
-  return {_mm256_blendv_pd(at.x, from.x + fraction * (to.x - from.x), crossing),
-          _mm256_blendv_pd(at.y, from.y + fraction * (to.y - from.y), crossing),
-          _mm256_blendv_pd(at.z, from.z + fraction * (to.z - from.z), crossing)};
-}
-
 /// out[4 * i + l] = strip[l][i] for i < count (four strips' coordinates into lanes): 4 x 4 transposes.
 HAIR_SIM_AVX2_TARGET void interleaveStrips(const double* const strip[4], std::size_t count, double* out) {
   std::size_t i = 0;
@@ -1022,114 +1129,6 @@ HAIR_SIM_AVX2_TARGET void interleaveStrips(const double* const strip[4], std::si
   for (; i < count; ++i) {
     for (int l = 0; l < 4; ++l) {
       out[4 * i + static_cast<std::size_t>(l)] = strip[l][i];
-    }
-  }
-}
-
-/// stripRows' record of the rows where a column's hair length ends, one array of lanes per value (lane l of
-/// value q of column u at [u][q][l], written by masked stores as the lanes cross): the row before's vertex
-/// (3), the step to this row's (3), this row's raw derivatives d/du (3) and d/dv (3), the row before's column
-/// curves and their d/dv (6 + 6, kLaneControlRow order), the walked length before the step and the step's
-/// length.
-enum ClipValue {
-  kClipLast = 0,
-  kClipStep = 3,
-  kClipDu = 6,
-  kClipDv = 9,
-  kClipCurve = 12,
-  kClipSlope = 18,
-  kClipLength = 24,
-  kClipSegment = 25,
-  kClipValues = 26
-};
-
-/// The lanes of bits `over` as a mask (all bits set per lane).
-HAIR_SIM_AVX2_TARGET inline __m256i laneMask(int over) {
-  const __m256i lane_bit = _mm256_set_epi64x(8, 4, 2, 1);
-  return _mm256_cmpeq_epi64(_mm256_and_si256(_mm256_set1_epi64x(over), lane_bit), lane_bit);
-}
-
-/// Lanes of `mask` of value into at[0..3] (the other lanes keep theirs): by a blend, as AVX2's masked store
-/// is slow on some CPUs (microcoded on AMD's).
-HAIR_SIM_AVX2_TARGET inline void storeMaskedLanes(double* at, __m256d mask, __m256d value) {
-  _mm256_storeu_pd(at, _mm256_blendv_pd(_mm256_loadu_pd(at), value, mask));
-}
-
-HAIR_SIM_AVX2_TARGET inline void storeMaskedQuad3(double* out, __m256d mask, const Quad3& value) {
-  storeMaskedLanes(out, mask, value.x);
-  storeMaskedLanes(out + 4, mask, value.y);
-  storeMaskedLanes(out + 8, mask, value.z);
-}
-
-HAIR_SIM_AVX2_TARGET inline Quad3 loadLanes3(const double* at) {
-  return {_mm256_loadu_pd(at), _mm256_loadu_pd(at + 4), _mm256_loadu_pd(at + 8)};
-}
-
-/// clipColumn and normalizeColumnFrom for vertex column u of the lanes of bits `crossed` (the same
-/// arithmetic, in lanes), from stripRows' record (ClipValue): the vertex moves back along the step to the
-/// hair length, the raw derivatives are interpolated from the row before's (as derivativesAt computes them
-/// from that row's curves: crossing rows are > 0, the root's step being zero), and every row from the
-/// crossing row down repeats the vertex, its unit frame and v = 1.
-HAIR_SIM_AVX2_TARGET inline __attribute__((always_inline)) void clipStripColumn(
-    const double (*record)[4], int crossed, const int* crossing_row, int u, int n_u, __m256d hair_length,
-    const __m256d* derivative, const __m256d* weight, StripMesh* meshes) {
-  const __m256d crossing = _mm256_castsi256_pd(laneMask(crossed));
-  const __m256d fraction =
-      (hair_length - _mm256_loadu_pd(record[kClipLength])) / _mm256_loadu_pd(record[kClipSegment]);
-  const Quad3 last = loadLanes3(record[kClipLast]);
-  const Quad3 step = loadLanes3(record[kClipStep]);
-  const Quad3 du = loadLanes3(record[kClipDu]);
-  const Quad3 dv = loadLanes3(record[kClipDv]);
-  __m256d curve[6];
-  __m256d slope[6];
-  for (int q = 0; q < 6; ++q) {
-    curve[q] = _mm256_loadu_pd(record[kClipCurve + q]);
-    slope[q] = _mm256_loadu_pd(record[kClipSlope + q]);
-  }
-  const __m256d zero = _mm256_setzero_pd();
-  const Quad3 previous_du{zero + derivative[0] * curve[0] + derivative[1] * curve[3],
-                          zero + derivative[0] * curve[1] + derivative[1] * curve[4],
-                          zero + derivative[0] * curve[2] + derivative[1] * curve[5]};
-  const Quad3 previous_dv{zero + weight[0] * slope[0] + weight[1] * slope[3],
-                          zero + weight[0] * slope[1] + weight[1] * slope[4],
-                          zero + weight[0] * slope[2] + weight[1] * slope[5]};
-  const Quad3 position{last.x + fraction * step.x, last.y + fraction * step.y, last.z + fraction * step.z};
-  // The lanes not crossing hold no record: a unit frame there, so that unitFrames4 judges only the others.
-  const __m256d one = _mm256_set1_pd(1.0);
-  const Quad3 clip_du{_mm256_blendv_pd(one, previous_du.x + fraction * (du.x - previous_du.x), crossing),
-                      _mm256_blendv_pd(zero, previous_du.y + fraction * (du.y - previous_du.y), crossing),
-                      _mm256_blendv_pd(zero, previous_du.z + fraction * (du.z - previous_du.z), crossing)};
-  const Quad3 clip_dv{_mm256_blendv_pd(zero, previous_dv.x + fraction * (dv.x - previous_dv.x), crossing),
-                      _mm256_blendv_pd(one, previous_dv.y + fraction * (dv.y - previous_dv.y), crossing),
-                      _mm256_blendv_pd(zero, previous_dv.z + fraction * (dv.z - previous_dv.z), crossing)};
-  Quad3 n;
-  Quad3 t;
-  const bool unit = unitFrames4(clip_du, clip_dv, n, t);
-  alignas(32) double lanes[9][4];
-  const Quad3* values[3] = {&position, unit ? &n : &clip_du, unit ? &t : &clip_dv};
-  for (int v = 0; v < 3; ++v) {
-    _mm256_store_pd(lanes[3 * v], values[v]->x);
-    _mm256_store_pd(lanes[3 * v + 1], values[v]->y);
-    _mm256_store_pd(lanes[3 * v + 2], values[v]->z);
-  }
-  for (int l = 0; l < 4; ++l) {
-    if (!(crossed & (1 << l))) {
-      continue;
-    }
-    StripMesh& mesh = meshes[l];
-    const std::size_t from = static_cast<std::size_t>(crossing_row[l]) * static_cast<std::size_t>(n_u) +
-                             static_cast<std::size_t>(u);
-    Vec3 normal(lanes[3][l], lanes[4][l], lanes[5][l]);
-    Vec3 tangent(lanes[6][l], lanes[7][l], lanes[8][l]);
-    if (!unit) {
-      normalizeFrame(normal.data(), tangent.data());
-    }
-    const Vec3 vertex(lanes[0][l], lanes[1][l], lanes[2][l]);
-    for (std::size_t at = from; at < mesh.positions.size(); at += static_cast<std::size_t>(n_u)) {
-      mesh.positions[at] = vertex;
-      mesh.normals[at] = normal;
-      mesh.tangents[at] = tangent;
-      mesh.v_param[at] = 1.0f;
     }
   }
 }
@@ -1231,18 +1230,16 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
       const __m256d walked = length[u] + segment;
       const int over = _mm256_movemask_pd(_mm256_cmp_pd(walked, limit, _CMP_GT_OQ)) & ~crossed[u];
       if (over != 0) {  // once per lane and column at most: the hair length ends in this row's segment
-        const __m256d mask = _mm256_castsi256_pd(laneMask(over));
-        double(*at)[4] = record[u];
-        storeMaskedQuad3(at[kClipLast], mask, last[u]);
-        storeMaskedQuad3(at[kClipStep], mask, step);
-        storeMaskedQuad3(at[kClipDu], mask, du);
-        storeMaskedQuad3(at[kClipDv], mask, dv);
-        for (int q = 0; q < 6; ++q) {
-          storeMaskedLanes(at[kClipCurve + q], mask, last_curve[q]);
-          storeMaskedLanes(at[kClipSlope + q], mask, last_slope[q]);
-        }
-        storeMaskedLanes(at[kClipLength], mask, length[u]);
-        storeMaskedLanes(at[kClipSegment], mask, segment);
+        // The row before's derivatives as derivativesAt computes them (iv > 0: the root's step is zero).
+        const __m256d zero = _mm256_setzero_pd();
+        const Quad3 previous_du{zero + dw[0] * last_curve[0] + dw[1] * last_curve[3],
+                                zero + dw[0] * last_curve[1] + dw[1] * last_curve[4],
+                                zero + dw[0] * last_curve[2] + dw[1] * last_curve[5]};
+        const Quad3 previous_dv{zero + w[u][0] * last_slope[0] + w[u][1] * last_slope[3],
+                                zero + w[u][0] * last_slope[1] + w[u][1] * last_slope[4],
+                                zero + w[u][0] * last_slope[2] + w[u][1] * last_slope[5]};
+        recordCrossing(record[u], over, crossed[u] == 0, last[u], step, du, dv, previous_du, previous_dv,
+                       length[u], segment);
         for (int l = 0; l < 4; ++l) {
           if (over & (1 << l)) {
             crossing_row[u][l] = iv;
@@ -1286,9 +1283,11 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
       break;
     }
   }
+  StripMesh* const mesh[4] = {meshes, meshes + 1, meshes + 2, meshes + 3};
   for (int u = 0; u < NU; ++u) {
     if (crossed[u] != 0) {
-      clipStripColumn(record[u], crossed[u], crossing_row[u], u, NU, limit, dw, w[u], meshes);
+      const int column[4] = {u, u, u, u};
+      clipLanes(record[u], crossed[u], crossing_row[u], limit, mesh, column);
     }
   }
 }
