@@ -45,7 +45,8 @@ def main():
     if 'BM_Step/100' in bench and 'BM_Step/10000' in bench:
         lines += ['', 'Cost per update at 10,000 strips / at 100: %.2f x.' % (
             bench['BM_Step/100']['items_per_second'] / bench['BM_Step/10000']['items_per_second'])]
-    lines += ['', '| tessellation (default hairstyle and level of detail, in one call) | ns per vertex |', '|---|---|']
+    lines += ['', '| tessellation (default hairstyle, config/hairstyles/default.yaml, default level of detail, in one '
+              'call) | ns per vertex |', '|---|---|']
     for name in ('BM_Tessellate_CachedBasis', 'BM_Tessellate_ForwardDifferencing', 'BM_Tessellate_DeBoor'):
         if name in bench:
             lines.append('| %s | %.1f |' % (name.replace('BM_Tessellate_', ''), 1e9 / bench[name]['items_per_second']))
@@ -54,6 +55,10 @@ def main():
         per_strip = 1e9 / bench['BM_Tessellate_CachedBasisPerStrip']['items_per_second']
         batch = 1e9 / bench['BM_Tessellate_CachedBasis']['items_per_second']
         lines.append('| CachedBasis, one call per strip (batch / this: %.2f x) | %.1f |' % (batch / per_strip, per_strip))
+    # A synthetic hairstyle of the same shape whose columns are never clipped (the benchmarks' until 2026-11-26).
+    if 'BM_Tessellate_CachedBasisUnclipped' in bench:
+        lines.append('| CachedBasis, a synthetic hairstyle of 100 strips of 2 x 5, nothing clipped | %.1f |'
+                     % (1e9 / bench['BM_Tessellate_CachedBasisUnclipped']['items_per_second']))
     # CachedBasis at more samples along (BM_Tessellate_CachedBasisAlong/<samples_along>): longer columns share
     # each strip's and each column's fixed work among more vertices.
     along = sorted((int(n.split('/')[1]), 1e9 / bench[n]['items_per_second']) for n in bench
