@@ -107,10 +107,10 @@ class Tessellator {
 
   /// Tessellates strips[i] into meshes[i] for i < count: the same meshes, bit for bit, as tessellate() one
   /// strip at a time. With CachedBasis on AVX2, four consecutive strips of two control columns and one row
-  /// count go through one kernel call, one strip per SIMD lane (at up to 3 samples across; 0.80 x the time
-  /// of one call per strip on the default hairstyle). Every strip is checked first, as tessellate()
-  /// checks one (the message names strip first_index + i): on a bad one it throws std::invalid_argument and
-  /// no mesh is changed. Null strips or meshes with count > 0 throw as well.
+  /// count go through one kernel call, one strip per SIMD lane (at up to 3 samples across; 0.75 x the time
+  /// of one call per strip on the default hairstyle, 2026-11-26). Every strip is checked first, as
+  /// tessellate() checks one (the message names strip first_index + i): on a bad one it throws
+  /// std::invalid_argument and no mesh is changed. Null strips or meshes with count > 0 throw as well.
   void tessellate(const StripInput* strips, std::size_t count, StripMesh* meshes,
                   std::size_t first_index = 0);
 
