@@ -1169,8 +1169,9 @@ constexpr int kLaneControlRow = 4 * 6;
 /// work fills the ports the square roots and divisions leave idle), then shared by the NU columns, whose
 /// length walks are independent chains; no lane idles (cachedRowQuads, with one strip's three columns in
 /// lanes, leaves one of four). Each lane computes what columnCurveQuads, then cachedRowQuads or
-/// cachedColumnQuads compute for its strip's column, in the same order; a lane that crosses its hair length
-/// has its column finished by clipColumn after the last row.
+/// cachedColumnQuads compute for its strip's column, in the same order. Lanes that cross their hair length
+/// are recorded as they cross (recordCrossing) and their columns finished after the last row, four lanes at
+/// once, with clipColumn's arithmetic (clipLanes).
 template <int K, int NU>
 HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, const double* along_weight,
                                     const double* along_derivative, const double* const* weights,
