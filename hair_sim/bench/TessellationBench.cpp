@@ -62,16 +62,19 @@ std::vector<SyntheticStrip> syntheticHairstyle() {
   return strips;
 }
 
-/// The default hairstyle (the node's, from config/).
-std::vector<SyntheticStrip> defaultHairstyle() {
-  const hair_sim::Hairstyle hairstyle =
-      hair_sim::loadHairstyle(std::string(HAIR_SIM_REPO_ROOT) + "/config/hairstyles/default.yaml");
-  std::vector<SyntheticStrip> strips;
-  for (const hair_sim::Strip& strip : hairstyle.strips) {
-    strips.push_back({strip.points, strip.hair_length});
-    strips.back().columns = strip.columns;
-    strips.back().rows = strip.rows;
-  }
+/// The default hairstyle (the node's, from config/), read once.
+const std::vector<SyntheticStrip>& defaultHairstyle() {
+  static const std::vector<SyntheticStrip> strips = [] {
+    const hair_sim::Hairstyle hairstyle =
+        hair_sim::loadHairstyle(std::string(HAIR_SIM_REPO_ROOT) + "/config/hairstyles/default.yaml");
+    std::vector<SyntheticStrip> out;
+    for (const hair_sim::Strip& strip : hairstyle.strips) {
+      out.push_back({strip.points, strip.hair_length});
+      out.back().columns = strip.columns;
+      out.back().rows = strip.rows;
+    }
+    return out;
+  }();
   return strips;
 }
 
