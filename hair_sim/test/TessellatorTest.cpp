@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "hair_sim/core/geometry/BSplineSurface.hpp"
+#include "hair_sim/core/model/HairstyleIO.hpp"
 
 namespace hair_sim {
 namespace {
@@ -562,6 +563,48 @@ TEST(TessellatorTest, BatchGivesTheMeshesOfOneCallPerStrip) {
     std::vector<StripMesh> part(7);
     batch.tessellate(strips.data() + 1, part.size(), part.data());
     for (std::size_t i = 0; i < part.size(); ++i) EXPECT_TRUE(sameMesh(part[i], expected[i + 1])) << i;
+  }
+}
+
+// The node's hairstyle: in most columns the hair length ends in the last span, so the batch's clip (in lanes)
+// runs at the last row of most columns. The meshes must be those of one call per strip, and a clipped
+// column's vertices must walk exactly the strip's hair length from the file (the sum of the segments'
+// lengths).
+TEST(TessellatorTest, BatchGivesTheDefaultHairstylesMeshesOfOneCallPerStrip) {
+  const Hairstyle hairstyle = loadHairstyle(test::repoPath("config/hairstyles/default.yaml"));
+  std::vector<StripInput> strips;
+  for (const Strip& strip : hairstyle.strips) {
+    strips.push_back({strip.points.data(), strip.columns, strip.rows, strip.hair_length});
+  }
+  for (const LevelOfDetail& level : {LevelOfDetail{}, LevelOfDetail{1, 1}, LevelOfDetail{3, 6}}) {
+    Tessellator batch(level, TessellationMethod::CachedBasis);
+    Tessellator single(level, TessellationMethod::CachedBasis);
+    std::vector<StripMesh> meshes(strips.size());
+    batch.tessellate(strips.data(), strips.size(), meshes.data());
+    int clipped_columns = 0;
+    for (std::size_t i = 0; i < strips.size(); ++i) {
+      StripMesh expected;
+      single.tessellate(strips[i].control_points, strips[i].columns, strips[i].rows, strips[i].hair_length,
+                        expected);
+      EXPECT_TRUE(sameMesh(meshes[i], expected))
+          << "level " << level.samples_across << " x " << level.samples_along << ", strip " << i;
+      const StripMesh& mesh = meshes[i];
+      for (int iu = 0; iu < mesh.n_u; ++iu) {
+        if (mesh.v_param[static_cast<std::size_t>((mesh.n_v - 1) * mesh.n_u + iu)] != 1.0f) continue;
+        ++clipped_columns;
+        double walked = 0.0;
+        for (int iv = 1; iv < mesh.n_v; ++iv) {
+          walked += (mesh.positions[static_cast<std::size_t>(iv * mesh.n_u + iu)] -
+                     mesh.positions[static_cast<std::size_t>((iv - 1) * mesh.n_u + iu)])
+                        .norm();
+        }
+        EXPECT_NEAR(walked, strips[i].hair_length, 1e-12) << "strip " << i << ", column " << iu;
+      }
+    }
+    // (At the default level 203 of the 300 columns are clipped, at 1 x 1 39: the coarser polyline is
+    // shorter.)
+    EXPECT_GT(clipped_columns, level.samples_along == 4 ? 150 : 0)
+        << "level " << level.samples_across << " x " << level.samples_along;
   }
 }
 
