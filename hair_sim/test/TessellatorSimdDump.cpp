@@ -127,5 +127,44 @@ int main() {
       }
     }
   }
+  // Finite control points 1e300 apart across and 1e10 along: |du x dv|^2 is inf - inf = NaN while |dv|^2 is
+  // in range, so every path must take the frames' fall-back (normals and tangents hashed too), one strip per
+  // call and four in the batch (with three plain strips, and four such strips).
+  std::vector<Vec3> nan_grid(10);
+  std::vector<Vec3> plain(10);
+  for (int r = 0; r < 5; ++r) {
+    nan_grid[static_cast<std::size_t>(2 * r)] = Vec3(0.0, 1e10 * r, 1e10 * r);
+    nan_grid[static_cast<std::size_t>(2 * r + 1)] = Vec3(0.0, 1e300, 1e300);
+    plain[static_cast<std::size_t>(2 * r)] = Vec3(0.0, 0.0, -0.02 * r);
+    plain[static_cast<std::size_t>(2 * r + 1)] = Vec3(0.01, 0.0, -0.02 * r);
+  }
+  auto hashAll = [](const StripMesh& m) {
+    std::uint64_t hash = 14695981039346656037ULL;
+    hashBytes(hash, m.positions.data(), m.positions.size() * sizeof(Vec3));
+    hashBytes(hash, m.normals.data(), m.normals.size() * sizeof(Vec3));
+    hashBytes(hash, m.tangents.data(), m.tangents.size() * sizeof(Vec3));
+    hashBytes(hash, m.v_param.data(), m.v_param.size() * sizeof(float));
+    return static_cast<unsigned long long>(hash);
+  };
+  for (const LevelOfDetail& level :
+       {LevelOfDetail{1, 1}, LevelOfDetail{1, 4}, LevelOfDetail{2, 4}, LevelOfDetail{3, 4}}) {
+    tessellator.setLevelOfDetail(level);
+    tessellator.tessellate(nan_grid, 2, 5, 3e10, mesh);
+    std::printf("nan normal, level %d x %d: %016llx\n", level.samples_across, level.samples_along,
+                hashAll(mesh));
+    for (int variant = 0; variant < 2; ++variant) {
+      StripInput strips[4];
+      for (int l = 0; l < 4; ++l) {
+        const bool nan_strip = variant == 0 || l == 0;
+        strips[l] = {nan_strip ? nan_grid.data() : plain.data(), 2, 5, nan_strip ? 3e10 : 0.05};
+      }
+      StripMesh meshes[4];
+      tessellator.tessellate(strips, 4, meshes);
+      for (int l = 0; l < 4; ++l) {
+        std::printf("nan normal batch, level %d x %d, variant %d, strip %d: %016llx\n", level.samples_across,
+                    level.samples_along, variant, l, hashAll(meshes[l]));
+      }
+    }
+  }
   return 0;
 }

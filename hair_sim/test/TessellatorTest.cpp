@@ -608,6 +608,42 @@ TEST(TessellatorTest, BatchGivesTheDefaultHairstylesMeshesOfOneCallPerStrip) {
   }
 }
 
+// Finite control points so far apart that |dS/du x dS/dv|^2 overflows to inf - inf = NaN: every path (the
+// batch's lanes and clip, one call per strip, the SSE2 and scalar frames) must take the same frame (the
+// fallback), so the batch gives the bytes of one call per strip, NaN included.
+TEST(TessellatorTest, FramesWithANanNormalTakeTheFallbackInEveryPath) {
+  const int rows = 5;
+  std::vector<Vec3> huge(2 * rows);
+  std::vector<Vec3> plain(2 * rows);
+  for (int r = 0; r < rows; ++r) {
+    huge[static_cast<std::size_t>(2 * r)] = Vec3(0.0, 1e10 * r, 1e10 * r);
+    huge[static_cast<std::size_t>(2 * r + 1)] = Vec3(0.0, 1e300, 1e300);
+    plain[static_cast<std::size_t>(2 * r)] = Vec3(0.0, 0.0, -0.02 * r);
+    plain[static_cast<std::size_t>(2 * r + 1)] = Vec3(0.01, 0.0, -0.02 * r);
+  }
+  for (const LevelOfDetail& level :
+       {LevelOfDetail{1, 1}, LevelOfDetail{1, 4}, LevelOfDetail{2, 4}, LevelOfDetail{3, 4}}) {
+    for (int variant = 0; variant < 2; ++variant) {  // four huge strips; one huge among plain ones
+      Tessellator batch(level, TessellationMethod::CachedBasis);
+      Tessellator single(level, TessellationMethod::CachedBasis);
+      StripInput strips[4];
+      for (int l = 0; l < 4; ++l) {
+        const bool is_huge = variant == 0 || l == 0;
+        strips[l] = {is_huge ? huge.data() : plain.data(), 2, rows, is_huge ? 3e10 : 0.05};
+      }
+      StripMesh meshes[4];
+      batch.tessellate(strips, 4, meshes);
+      for (int l = 0; l < 4; ++l) {
+        StripMesh expected;
+        single.tessellate(strips[l].control_points, 2, rows, strips[l].hair_length, expected);
+        EXPECT_TRUE(sameMesh(meshes[l], expected))
+            << "level " << level.samples_across << " x " << level.samples_along << ", variant " << variant
+            << ", strip " << l;
+      }
+    }
+  }
+}
+
 TEST(TessellatorTest, BatchChecksEveryStripBeforeChangingAnyMesh) {
   Tessellator tessellator;
   std::vector<std::vector<Vec3>> grids;

@@ -95,7 +95,10 @@ static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be three packed dou
 
 /// Range of |n|^2 and |t|^2 where every path (scalar, SSE2, AVX2) makes the unit frame as n * (1 / sqrt(n2)),
 /// lane by lane, so that they give the same bits; outside it (degenerate or overflowing derivatives)
-/// normalizeFrame's exact fall-back is taken.
+/// normalizeFrame's exact fall-back is taken. Every path tests min(n2, t2) >= kFastFrameMin and max(t2, n2)
+/// <= kFastFrameMax in that operand order: min and max (std:: and SSE/AVX alike) return one operand when the
+/// other is NaN, and with these orders a NaN in either fails one of the two tests everywhere (a NaN n2 comes
+/// from inf - inf in du x dv when finite control points are ~1e154 apart).
 constexpr double kFastFrameMin = 1e-30;
 constexpr double kFastFrameMax = 1e30;
 
@@ -142,7 +145,7 @@ inline bool unitFrames(const Pair3& du, const Pair3& dv, Pair3& normal, Pair3& t
   const __m128d n2 = dot(n, n);
   const __m128d t2 = dot(dv, dv);
   const __m128d in_range = _mm_and_pd(_mm_cmpge_pd(_mm_min_pd(n2, t2), _mm_set1_pd(kFastFrameMin)),
-                                      _mm_cmple_pd(_mm_max_pd(n2, t2), _mm_set1_pd(kFastFrameMax)));
+                                      _mm_cmple_pd(_mm_max_pd(t2, n2), _mm_set1_pd(kFastFrameMax)));
   if (_mm_movemask_pd(in_range) != 0x3) {
     return false;
   }
@@ -176,7 +179,7 @@ inline void normalizeFrame(double* nd, double* td) {
   const double nz = ux * vy - uy * vx;
   const double n2 = nx * nx + ny * ny + nz * nz;
   const double t2 = vx * vx + vy * vy + vz * vz;
-  if (std::min(n2, t2) >= kFastFrameMin && std::max(n2, t2) <= kFastFrameMax) {
+  if (std::min(n2, t2) >= kFastFrameMin && std::max(t2, n2) <= kFastFrameMax) {
     const double inverse_n = 1.0 / std::sqrt(n2);
     const double inverse_t = 1.0 / std::sqrt(t2);
     nd[0] = nx * inverse_n;
@@ -667,7 +670,7 @@ HAIR_SIM_AVX2_TARGET inline bool unitFrames4(const Quad3& du, const Quad3& dv, Q
   const __m256d t2 = dot4(dv, dv);
   const __m256d in_range =
       _mm256_and_pd(_mm256_cmp_pd(_mm256_min_pd(n2, t2), _mm256_set1_pd(kFastFrameMin), _CMP_GE_OQ),
-                    _mm256_cmp_pd(_mm256_max_pd(n2, t2), _mm256_set1_pd(kFastFrameMax), _CMP_LE_OQ));
+                    _mm256_cmp_pd(_mm256_max_pd(t2, n2), _mm256_set1_pd(kFastFrameMax), _CMP_LE_OQ));
   if (_mm256_movemask_pd(in_range) != 0xF) {
     return false;
   }
