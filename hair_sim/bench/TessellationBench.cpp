@@ -20,7 +20,7 @@ using hair_sim::TessellationMethod;
 using hair_sim::Tessellator;
 using hair_sim::Vec3;
 
-struct SyntheticStrip {
+struct BenchStrip {
   std::vector<Vec3> points;
   double hair_length = 0.0;
   int columns = 2;
@@ -33,8 +33,8 @@ constexpr int kRows = 5;
 
 /// Strips rooted on a 0.1 m sphere, hanging down and outwards with a bend; deterministic. Each hair length
 /// is the length of its control polygon, longer than the surface's columns: nothing is clipped.
-std::vector<SyntheticStrip> syntheticHairstyle() {
-  std::vector<SyntheticStrip> strips(kStrips);
+std::vector<BenchStrip> syntheticHairstyle() {
+  std::vector<BenchStrip> strips(kStrips);
   const double pi = std::acos(-1.0);
   for (int i = 0; i < kStrips; ++i) {
     const double azimuth = 2.0 * pi * i / kStrips;
@@ -45,7 +45,7 @@ std::vector<SyntheticStrip> syntheticHairstyle() {
                       std::sin(elevation));
     const Vec3 side(-std::sin(azimuth), std::cos(azimuth), 0.0);
     const Vec3 outward(std::cos(azimuth), std::sin(azimuth), 0.0);
-    SyntheticStrip& strip = strips[static_cast<std::size_t>(i)];
+    BenchStrip& strip = strips[static_cast<std::size_t>(i)];
     strip.hair_length = length;
     strip.points.resize(kColumns * kRows);
     for (int c = 0; c < kColumns; ++c) {
@@ -63,11 +63,11 @@ std::vector<SyntheticStrip> syntheticHairstyle() {
 }
 
 /// The default hairstyle (the node's, from config/), read once.
-const std::vector<SyntheticStrip>& defaultHairstyle() {
-  static const std::vector<SyntheticStrip> strips = [] {
+const std::vector<BenchStrip>& defaultHairstyle() {
+  static const std::vector<BenchStrip> strips = [] {
     const hair_sim::Hairstyle hairstyle =
         hair_sim::loadHairstyle(std::string(HAIR_SIM_REPO_ROOT) + "/config/hairstyles/default.yaml");
-    std::vector<SyntheticStrip> out;
+    std::vector<BenchStrip> out;
     for (const hair_sim::Strip& strip : hairstyle.strips) {
       out.push_back({strip.points, strip.hair_length});
       out.back().columns = strip.columns;
@@ -80,23 +80,23 @@ const std::vector<SyntheticStrip>& defaultHairstyle() {
 
 /// The hairstyle in one call (the batch form of tessellate, as HairMeshBuilder calls it), or with
 /// per_strip one call per strip.
-void runTessellation(benchmark::State& state, const std::vector<SyntheticStrip>& strips,
+void runTessellation(benchmark::State& state, const std::vector<BenchStrip>& strips,
                      TessellationMethod method, LevelOfDetail level = {}, bool per_strip = false) {
   Tessellator tessellator(level, method);
   std::vector<StripMesh> meshes(strips.size());
   std::vector<hair_sim::StripInput> inputs(strips.size());
   std::int64_t vertices = 0;
   for (std::size_t i = 0; i < strips.size(); ++i) {  // warm caches and mesh storage
-    const SyntheticStrip& strip = strips[i];
+    const BenchStrip& strip = strips[i];
     tessellator.tessellate(strip.points, strip.columns, strip.rows, strip.hair_length, meshes[i]);
     vertices += meshes[i].vertexCount();
     inputs[i] = {strip.points.data(), strip.columns, strip.rows, strip.hair_length};
   }
   for (auto _ : state) {
     if (per_strip) {
-      for (const hair_sim::StripInput& in : inputs) {
-        tessellator.tessellate(in.control_points, in.columns, in.rows, in.hair_length,
-                               meshes[static_cast<std::size_t>(&in - inputs.data())]);
+      for (std::size_t i = 0; i < inputs.size(); ++i) {
+        const hair_sim::StripInput& in = inputs[i];
+        tessellator.tessellate(in.control_points, in.columns, in.rows, in.hair_length, meshes[i]);
       }
     } else {
       tessellator.tessellate(inputs.data(), inputs.size(), meshes.data());

@@ -248,7 +248,8 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     // opposite directions (s <= 1e-12, c <= 0) by the scalar function.
     const V sn = vsqrt(s2);
     const M has_axis = sn > 1e-12;
-    // vatan2 (five divisions) only where a lane takes it: nearly every hinge is within the series.
+    // vatan2 and its division by sn (five divisions) only when some lane takes them: nearly every hinge is
+    // within the series.
     V by_atan = splat<V>(0.0);
     if (anyLane(~series & has_axis)) by_atan = vatan2(sn, c) / sel(has_axis, sn, splat<V>(1.0));
     const V scale = sel(series, p / sel(c != 0.0, c, splat<V>(1.0)), sel(has_axis, by_atan, splat<V>(0.0)));
@@ -272,7 +273,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     Wx = Wx - wn * nx, Wy = Wy - wn * ny, Wz = Wz - wn * nz;
     const V step_angle = vsqrt(Wx * Wx + Wy * Wy + Wz * Wz);
     const M over = step_angle > max_step;
-    if (anyLane(over)) {  // (a division only where a lane is over the limit)
+    if (anyLane(over)) {  // (the division only when some lane is over the limit)
       const V limit = max_step / sel(over, step_angle, splat<V>(1.0));
       Wx = sel(over, Wx * limit, Wx), Wy = sel(over, Wy * limit, Wy), Wz = sel(over, Wz * limit, Wz);
     }

@@ -265,7 +265,7 @@ HAIR_SIM_AVX2_TARGET bool allFiniteAvx2(const double* values, std::size_t count)
 #endif
 
 /// True when none of the `count` doubles is infinite or NaN (exponent bits all ones). Integer operations (no
-/// floating-point exception flag is raised) and no branch. SSE2 has no 64-bit integer comparison: two doubles
+/// floating-point exception flag is raised). SSE2 has no 64-bit integer comparison: two doubles
 /// at a time, their high 32-bit halves hold the exponent bits. (With AVX2: allFiniteAvx2.)
 bool allFinite(const double* values, std::size_t count) {
 #if defined(HAIR_SIM_AVX2)
@@ -724,7 +724,7 @@ HAIR_SIM_AVX2_TARGET inline void storeFloatLanes(__m128 value, float* out, std::
 }
 
 /// stripRows' record of the rows where a lane's walk crosses the hair length, one array of lanes per
-/// value (lane l of value q at [q][l], written by blends as the lanes cross): the row before's vertex (3),
+/// value (lane l of value q at [q][l]; recordCrossing): the row before's vertex (3),
 /// the step to this row's (3), this row's raw derivatives d/du and d/dv (3 + 3), the row before's (3 + 3, as
 /// derivativesAt computes them), the walked length before the step and the step's length.
 enum ClipValue {
@@ -763,8 +763,9 @@ HAIR_SIM_AVX2_TARGET inline Quad3 loadQuad3Lanes(const double (*at)[4]) {
   return {_mm256_loadu_pd(at[0]), _mm256_loadu_pd(at[1]), _mm256_loadu_pd(at[2])};
 }
 
-/// Records the lanes of bits `over` (ClipValue) in `record`. `first`: the record holds no lane yet, so every
-/// lane is written (the others are overwritten as they cross, or never read).
+/// Records the lanes of bits `over` (ClipValue) in `record`, by blends. `first`: the record holds no lane
+/// yet, so every lane is written; the others are overwritten as they cross, and clipLanes discards what it
+/// computes for lanes that never do.
 HAIR_SIM_AVX2_TARGET inline void recordCrossing(double (*record)[4], int over, bool first, const Quad3& last,
                                                 const Quad3& step, const Quad3& du, const Quad3& dv,
                                                 const Quad3& previous_du, const Quad3& previous_dv,
@@ -780,13 +781,22 @@ HAIR_SIM_AVX2_TARGET inline void recordCrossing(double (*record)[4], int over, b
   storeMaskedLanes(record[kClipSegment], mask, segment, first);
 }
 
-/// clipColumn and normalizeColumnFrom for the lanes of bits `crossed` (the same arithmetic, in lanes), from
-/// their record (ClipValue): the vertex moves back along the step to the hair length, the raw derivatives are
-/// interpolated from the row before's, and every row of the lane's column (column[l] of mesh[l]) from its
-/// crossing row down repeats the vertex, its unit frame and v = 1.
-HAIR_SIM_AVX2_TARGET inline __attribute__((always_inline)) void clipLanes(
-    const double (*record)[4], int crossed, const int* crossing_row, __m256d hair_length,
-    StripMesh* const* mesh, const int* column) {
+/// Lanes of `mask`: from + fraction (to - from), clipColumn's interpolation; the other lanes: fill.
+HAIR_SIM_AVX2_TARGET inline __m256d interpolatedLanes(__m256d fill, __m256d from, __m256d to,
+                                                      __m256d fraction, __m256d mask) {
+  return _mm256_blendv_pd(fill, from + fraction * (to - from), mask);
+}
+
+/// clipColumn and normalizeColumnFrom for vertex column `column` of meshes[l], l in the bits of `crossed`
+/// (clipColumn's arithmetic in lanes; the frame by unitFrames4, or normalizeFrame where a lane is out of its
+/// range, as normalizeFrame alone would give it), from their record (ClipValue): the vertex moves back along
+/// the step to the hair length, the raw derivatives are interpolated from the row before's, and every row of
+/// the column from the crossing row down repeats the vertex, its unit frame and v = 1.
+HAIR_SIM_AVX2_TARGET inline __attribute__((always_inline)) void clipLanes(const double (*record)[4],
+                                                                          int crossed,
+                                                                          const int* crossing_row,
+                                                                          __m256d hair_length,
+                                                                          StripMesh* meshes, int column) {
   const __m256d crossing = laneMask(crossed);
   const __m256d fraction =
       (hair_length - _mm256_loadu_pd(record[kClipLength])) / _mm256_loadu_pd(record[kClipSegment]);
@@ -797,15 +807,16 @@ HAIR_SIM_AVX2_TARGET inline __attribute__((always_inline)) void clipLanes(
   const Quad3 previous_du = loadQuad3Lanes(record + kClipPreviousDu);
   const Quad3 previous_dv = loadQuad3Lanes(record + kClipPreviousDv);
   const Quad3 position{last.x + fraction * step.x, last.y + fraction * step.y, last.z + fraction * step.z};
-  // The lanes not crossing hold no record: a unit frame there, so that unitFrames4 judges only the others.
+  // The lanes not crossing get a unit frame (their record is another lane's or stale, and their results are
+  // discarded), so that unitFrames4 judges only the others.
   const __m256d zero = _mm256_setzero_pd();
   const __m256d one = _mm256_set1_pd(1.0);
-  const Quad3 clip_du{_mm256_blendv_pd(one, previous_du.x + fraction * (du.x - previous_du.x), crossing),
-                      _mm256_blendv_pd(zero, previous_du.y + fraction * (du.y - previous_du.y), crossing),
-                      _mm256_blendv_pd(zero, previous_du.z + fraction * (du.z - previous_du.z), crossing)};
-  const Quad3 clip_dv{_mm256_blendv_pd(zero, previous_dv.x + fraction * (dv.x - previous_dv.x), crossing),
-                      _mm256_blendv_pd(one, previous_dv.y + fraction * (dv.y - previous_dv.y), crossing),
-                      _mm256_blendv_pd(zero, previous_dv.z + fraction * (dv.z - previous_dv.z), crossing)};
+  const Quad3 clip_du{interpolatedLanes(one, previous_du.x, du.x, fraction, crossing),
+                      interpolatedLanes(zero, previous_du.y, du.y, fraction, crossing),
+                      interpolatedLanes(zero, previous_du.z, du.z, fraction, crossing)};
+  const Quad3 clip_dv{interpolatedLanes(zero, previous_dv.x, dv.x, fraction, crossing),
+                      interpolatedLanes(one, previous_dv.y, dv.y, fraction, crossing),
+                      interpolatedLanes(zero, previous_dv.z, dv.z, fraction, crossing)};
   Quad3 n;
   Quad3 t;
   const bool unit = unitFrames4(clip_du, clip_dv, n, t);
@@ -820,7 +831,7 @@ HAIR_SIM_AVX2_TARGET inline __attribute__((always_inline)) void clipLanes(
     if (!(crossed & (1 << l))) {
       continue;
     }
-    StripMesh& m = *mesh[l];
+    StripMesh& m = meshes[l];
     const std::size_t n_u = static_cast<std::size_t>(m.n_u);
     Vec3 normal(lanes[3][l], lanes[4][l], lanes[5][l]);
     Vec3 tangent(lanes[6][l], lanes[7][l], lanes[8][l]);
@@ -828,8 +839,7 @@ HAIR_SIM_AVX2_TARGET inline __attribute__((always_inline)) void clipLanes(
       normalizeFrame(normal.data(), tangent.data());
     }
     const Vec3 vertex(lanes[0][l], lanes[1][l], lanes[2][l]);
-    for (std::size_t at =
-             static_cast<std::size_t>(crossing_row[l]) * n_u + static_cast<std::size_t>(column[l]);
+    for (std::size_t at = static_cast<std::size_t>(crossing_row[l]) * n_u + static_cast<std::size_t>(column);
          at < m.positions.size(); at += n_u) {
       m.positions[at] = vertex;
       m.normals[at] = normal;
@@ -1173,7 +1183,7 @@ constexpr int kLaneControlRow = 4 * 6;
 /// length walks are independent chains; no lane idles (cachedRowQuads, with one strip's three columns in
 /// lanes, leaves one of four). Each lane computes what columnCurveQuads, then cachedRowQuads or
 /// cachedColumnQuads compute for its strip's column, in the same order. Lanes that cross their hair length
-/// are recorded as they cross (recordCrossing) and their columns finished after the last row, four lanes at
+/// are recorded as they cross (recordCrossing) and their columns finished after the row loop, four lanes at
 /// once, with clipColumn's arithmetic (clipLanes).
 template <int K, int NU>
 HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, const double* along_weight,
@@ -1206,7 +1216,7 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
   int crossing_row[NU][4] = {};
   __m256d length[NU];
   Quad3 last[NU];
-  double record[NU][kClipValues][4];  // (lanes written as they cross, read only for those: no initial value)
+  double record[NU][kClipValues][4];  // (written whole at a column's first crossing: recordCrossing)
   __m256d last_curve[6] = {};         // the row before's (for a clip)
   __m256d last_slope[6] = {};
   const int all_crossed = 0xF;
@@ -1312,11 +1322,9 @@ HAIR_SIM_AVX2_TARGET void stripRows(const double* control, const int* first, con
       break;
     }
   }
-  StripMesh* const mesh[4] = {meshes, meshes + 1, meshes + 2, meshes + 3};
   for (int u = 0; u < NU; ++u) {
     if (crossed[u] != 0) {
-      const int column[4] = {u, u, u, u};
-      clipLanes(record[u], crossed[u], crossing_row[u], limit, mesh, column);
+      clipLanes(record[u], crossed[u], crossing_row[u], limit, meshes, u);
     }
   }
 }
