@@ -245,35 +245,33 @@ void normalizeFrames(Vec3* normals, Vec3* tangents, std::size_t count) {
 }
 
 #if defined(HAIR_SIM_AVX2)
-/// allFinite with AVX2: four doubles at a time, their exponent bits compared as 64-bit integers.
-HAIR_SIM_AVX2_TARGET bool allFiniteAvx2(const double* values, std::size_t count) {
+/// allFinite's AVX2 part: whether the first 4 * quads doubles are finite, four at a time, their exponent
+/// bits compared as 64-bit integers.
+HAIR_SIM_AVX2_TARGET bool quadsFinite(const double* values, std::size_t quads) {
   const __m256i exponent = _mm256_set1_epi64x(0x7FF0000000000000LL);
   __m256i all_ones = _mm256_setzero_si256();  // per lane: its exponent bits were all ones
-  std::size_t i = 0;
-  for (; i + 4 <= count; i += 4) {
-    const __m256i bits = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(values + i));
+  for (std::size_t q = 0; q < quads; ++q) {
+    const __m256i bits = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(values + 4 * q));
     all_ones = _mm256_or_si256(all_ones, _mm256_cmpeq_epi64(_mm256_and_si256(bits, exponent), exponent));
   }
-  std::uint64_t non_finite = static_cast<std::uint64_t>(_mm256_testz_si256(all_ones, all_ones) == 0);
-  for (; i < count; ++i) {
-    std::uint64_t bits;
-    std::memcpy(&bits, values + i, sizeof bits);
-    non_finite |= static_cast<std::uint64_t>((bits & 0x7FF0000000000000ULL) == 0x7FF0000000000000ULL);
-  }
-  return non_finite == 0;
+  return _mm256_testz_si256(all_ones, all_ones) != 0;
 }
 #endif
 
 /// True when none of the `count` doubles is infinite or NaN (exponent bits all ones). Integer operations (no
-/// floating-point exception flag is raised). SSE2 has no 64-bit integer comparison: two doubles
-/// at a time, their high 32-bit halves hold the exponent bits. (With AVX2: allFiniteAvx2.)
+/// floating-point exception flag is raised). With AVX2 four doubles at a time (quadsFinite); SSE2 has no
+/// 64-bit integer comparison: two doubles at a time, their high 32-bit halves hold the exponent bits. The
+/// rest one by one.
 bool allFinite(const double* values, std::size_t count) {
+  std::size_t i = 0;
 #if defined(HAIR_SIM_AVX2)
   if (cpuHasAvx2()) {
-    return allFiniteAvx2(values, count);
+    if (!quadsFinite(values, count / 4)) {
+      return false;
+    }
+    i = count / 4 * 4;
   }
 #endif
-  std::size_t i = 0;
 #if defined(HAIR_SIM_SSE2)
   const __m128i exponent = _mm_set_epi32(0x7FF00000, 0, 0x7FF00000, 0);
   __m128i all_ones = _mm_setzero_si128();  // per high half: its exponent bits were all ones
@@ -759,10 +757,6 @@ HAIR_SIM_AVX2_TARGET inline void storeMaskedQuad3(double (*at)[4], __m256d mask,
   storeMaskedLanes(at[2], mask, value.z, first);
 }
 
-HAIR_SIM_AVX2_TARGET inline Quad3 loadQuad3Lanes(const double (*at)[4]) {
-  return {_mm256_loadu_pd(at[0]), _mm256_loadu_pd(at[1]), _mm256_loadu_pd(at[2])};
-}
-
 /// Records the lanes of bits `over` (ClipValue) in `record`, by blends. `first`: the record holds no lane
 /// yet, so every lane is written; the others are overwritten as they cross, and clipLanes discards what it
 /// computes for lanes that never do.
@@ -800,12 +794,12 @@ HAIR_SIM_AVX2_TARGET inline __attribute__((always_inline)) void clipLanes(const 
   const __m256d crossing = laneMask(crossed);
   const __m256d fraction =
       (hair_length - _mm256_loadu_pd(record[kClipLength])) / _mm256_loadu_pd(record[kClipSegment]);
-  const Quad3 last = loadQuad3Lanes(record + kClipLast);
-  const Quad3 step = loadQuad3Lanes(record + kClipStep);
-  const Quad3 du = loadQuad3Lanes(record + kClipDu);
-  const Quad3 dv = loadQuad3Lanes(record + kClipDv);
-  const Quad3 previous_du = loadQuad3Lanes(record + kClipPreviousDu);
-  const Quad3 previous_dv = loadQuad3Lanes(record + kClipPreviousDv);
+  const Quad3 last = loadQuad3(record[kClipLast], 4);
+  const Quad3 step = loadQuad3(record[kClipStep], 4);
+  const Quad3 du = loadQuad3(record[kClipDu], 4);
+  const Quad3 dv = loadQuad3(record[kClipDv], 4);
+  const Quad3 previous_du = loadQuad3(record[kClipPreviousDu], 4);
+  const Quad3 previous_dv = loadQuad3(record[kClipPreviousDv], 4);
   const Quad3 position{last.x + fraction * step.x, last.y + fraction * step.y, last.z + fraction * step.z};
   // The lanes not crossing get a unit frame (their record is another lane's or stale, and their results are
   // discarded), so that unitFrames4 judges only the others.
