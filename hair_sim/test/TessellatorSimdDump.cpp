@@ -16,6 +16,14 @@ using namespace hair_sim;
 using simd_dump::curvedGrid;
 using simd_dump::hashBytes;
 
+/// Adds every output bit of the mesh but u_param (positions, normals, tangents, v_param) to the hash.
+void hashMesh(std::uint64_t& hash, const StripMesh& m) {
+  hashBytes(hash, m.positions.data(), m.positions.size() * sizeof(Vec3));
+  hashBytes(hash, m.normals.data(), m.normals.size() * sizeof(Vec3));
+  hashBytes(hash, m.tangents.data(), m.tangents.size() * sizeof(Vec3));
+  hashBytes(hash, m.v_param.data(), m.v_param.size() * sizeof(float));
+}
+
 int main() {
   Tessellator tessellator(LevelOfDetail{}, TessellationMethod::CachedBasis);
   StripMesh mesh;
@@ -29,10 +37,7 @@ int main() {
           for (double hair_length : {10.0, 0.05 * rows, 0.03 * rows}) {
             tessellator.tessellate(grid, columns, rows, hair_length, mesh);
             std::uint64_t hash = 14695981039346656037ULL;
-            hashBytes(hash, mesh.positions.data(), mesh.positions.size() * sizeof(Vec3));
-            hashBytes(hash, mesh.normals.data(), mesh.normals.size() * sizeof(mesh.normals[0]));
-            hashBytes(hash, mesh.tangents.data(), mesh.tangents.size() * sizeof(mesh.tangents[0]));
-            hashBytes(hash, mesh.v_param.data(), mesh.v_param.size() * sizeof(float));
+            hashMesh(hash, mesh);
             std::printf("level %d x %d, %d x %d, seed %d, length %.2f: %016llx\n", level.samples_across,
                         level.samples_along, columns, rows, seed, hair_length,
                         static_cast<unsigned long long>(hash));
@@ -68,10 +73,7 @@ int main() {
     for (std::size_t i = 0; i < meshes.size(); ++i) {
       const StripMesh& m = meshes[i];
       std::uint64_t hash = 14695981039346656037ULL;
-      hashBytes(hash, m.positions.data(), m.positions.size() * sizeof(Vec3));
-      hashBytes(hash, m.normals.data(), m.normals.size() * sizeof(m.normals[0]));
-      hashBytes(hash, m.tangents.data(), m.tangents.size() * sizeof(m.tangents[0]));
-      hashBytes(hash, m.v_param.data(), m.v_param.size() * sizeof(float));
+      hashMesh(hash, m);
       hashBytes(hash, m.u_param.data(), m.u_param.size() * sizeof(float));
       std::printf("batch, level %d x %d, strip %zu (%d x %d): %016llx\n", level.samples_across,
                   level.samples_along, i, strips[i].columns, strips[i].rows,
@@ -140,10 +142,7 @@ int main() {
   }
   auto hashAll = [](const StripMesh& m) {
     std::uint64_t hash = 14695981039346656037ULL;
-    hashBytes(hash, m.positions.data(), m.positions.size() * sizeof(Vec3));
-    hashBytes(hash, m.normals.data(), m.normals.size() * sizeof(Vec3));
-    hashBytes(hash, m.tangents.data(), m.tangents.size() * sizeof(Vec3));
-    hashBytes(hash, m.v_param.data(), m.v_param.size() * sizeof(float));
+    hashMesh(hash, m);
     return static_cast<unsigned long long>(hash);
   };
   for (const LevelOfDetail& level :

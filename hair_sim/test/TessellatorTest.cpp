@@ -522,6 +522,19 @@ bool sameMesh(const StripMesh& a, const StripMesh& b) {
          std::memcmp(a.u_param.data(), b.u_param.data(), n * sizeof(float)) == 0;
 }
 
+// The meshes of one tessellate() call per strip (CachedBasis, a Tessellator of their own): what the batch
+// form must give bit for bit.
+std::vector<StripMesh> oneCallPerStrip(const LevelOfDetail& level, const StripInput* strips,
+                                       std::size_t count) {
+  Tessellator single(level, TessellationMethod::CachedBasis);
+  std::vector<StripMesh> meshes(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    single.tessellate(strips[i].control_points, strips[i].columns, strips[i].rows, strips[i].hair_length,
+                      meshes[i]);
+  }
+  return meshes;
+}
+
 // The batch form gives one call per strip's meshes bit for bit: runs of 2-column strips of one row count
 // (four to an AVX2 kernel call, one per lane) between strips of other shapes, clipped and unclipped, a
 // degenerate strip among them, runs of four strips that are all clipped (the kernel stops after the last
@@ -531,7 +544,6 @@ TEST(TessellatorTest, BatchGivesTheMeshesOfOneCallPerStrip) {
   for (const LevelOfDetail& level : {LevelOfDetail{1, 1}, LevelOfDetail{2, 4}, LevelOfDetail{3, 5},
                                      LevelOfDetail{4, 3}, LevelOfDetail{2, 9}}) {
     Tessellator batch(level, TessellationMethod::CachedBasis);
-    Tessellator single(level, TessellationMethod::CachedBasis);
     std::vector<std::vector<Vec3>> grids;
     std::vector<StripInput> strips;
     const int shapes[][2] = {{2, 5}, {2, 5}, {2, 5}, {2, 5}, {2, 5}, {2, 5}, {3, 5}, {2, 6},
@@ -546,13 +558,11 @@ TEST(TessellatorTest, BatchGivesTheMeshesOfOneCallPerStrip) {
       const double hair_length = i % 5 == 4 ? 10.0 : 0.04 * rows + 0.01 * static_cast<double>(i % 3);
       strips.push_back({grids[i].data(), shapes[i][0], rows, hair_length});
     }
+    const std::vector<StripMesh> expected = oneCallPerStrip(level, strips.data(), strips.size());
     std::vector<StripMesh> meshes(strips.size());
-    std::vector<StripMesh> expected(strips.size());
     for (std::size_t i = 0; i < strips.size(); ++i) {  // other grids first
       batch.tessellate(grids[(i + 7) % grids.size()], shapes[(i + 7) % grids.size()][0],
                        shapes[(i + 7) % grids.size()][1], 0.2, meshes[i]);
-      single.tessellate(strips[i].control_points, strips[i].columns, strips[i].rows, strips[i].hair_length,
-                        expected[i]);
     }
     batch.tessellate(strips.data(), strips.size(), meshes.data());
     for (std::size_t i = 0; i < strips.size(); ++i) {
@@ -578,15 +588,12 @@ TEST(TessellatorTest, BatchGivesTheDefaultHairstylesMeshesOfOneCallPerStrip) {
   }
   for (const LevelOfDetail& level : {LevelOfDetail{}, LevelOfDetail{1, 1}, LevelOfDetail{3, 6}}) {
     Tessellator batch(level, TessellationMethod::CachedBasis);
-    Tessellator single(level, TessellationMethod::CachedBasis);
     std::vector<StripMesh> meshes(strips.size());
     batch.tessellate(strips.data(), strips.size(), meshes.data());
+    const std::vector<StripMesh> expected = oneCallPerStrip(level, strips.data(), strips.size());
     int clipped_columns = 0;
     for (std::size_t i = 0; i < strips.size(); ++i) {
-      StripMesh expected;
-      single.tessellate(strips[i].control_points, strips[i].columns, strips[i].rows, strips[i].hair_length,
-                        expected);
-      EXPECT_TRUE(sameMesh(meshes[i], expected))
+      EXPECT_TRUE(sameMesh(meshes[i], expected[i]))
           << "level " << level.samples_across << " x " << level.samples_along << ", strip " << i;
       const StripMesh& mesh = meshes[i];
       for (int iu = 0; iu < mesh.n_u; ++iu) {
@@ -625,7 +632,6 @@ TEST(TessellatorTest, FramesWithANanNormalTakeTheFallbackInEveryPath) {
        {LevelOfDetail{1, 1}, LevelOfDetail{1, 4}, LevelOfDetail{2, 4}, LevelOfDetail{3, 4}}) {
     for (int variant = 0; variant < 2; ++variant) {  // four huge strips; one huge among plain ones
       Tessellator batch(level, TessellationMethod::CachedBasis);
-      Tessellator single(level, TessellationMethod::CachedBasis);
       StripInput strips[4];
       for (int l = 0; l < 4; ++l) {
         const bool is_huge = variant == 0 || l == 0;
@@ -633,10 +639,9 @@ TEST(TessellatorTest, FramesWithANanNormalTakeTheFallbackInEveryPath) {
       }
       StripMesh meshes[4];
       batch.tessellate(strips, 4, meshes);
+      const std::vector<StripMesh> expected = oneCallPerStrip(level, strips, 4);
       for (int l = 0; l < 4; ++l) {
-        StripMesh expected;
-        single.tessellate(strips[l].control_points, 2, rows, strips[l].hair_length, expected);
-        EXPECT_TRUE(sameMesh(meshes[l], expected))
+        EXPECT_TRUE(sameMesh(meshes[l], expected[static_cast<std::size_t>(l)]))
             << "level " << level.samples_across << " x " << level.samples_along << ", variant " << variant
             << ", strip " << l;
       }
