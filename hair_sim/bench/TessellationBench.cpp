@@ -69,9 +69,7 @@ const std::vector<BenchStrip>& defaultHairstyle() {
         hair_sim::loadHairstyle(std::string(HAIR_SIM_REPO_ROOT) + "/config/hairstyles/default.yaml");
     std::vector<BenchStrip> out;
     for (const hair_sim::Strip& strip : hairstyle.strips) {
-      out.push_back({strip.points, strip.hair_length});
-      out.back().columns = strip.columns;
-      out.back().rows = strip.rows;
+      out.push_back({strip.points, strip.hair_length, strip.columns, strip.rows});
     }
     return out;
   }();
