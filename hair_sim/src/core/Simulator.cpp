@@ -124,7 +124,9 @@ void Simulator::buildChains() {
     margin_of_strip_.push_back(static_cast<int>(m));
   }
   int offset = 0;
+  std::size_t largest = 0;
   for (const Strip& s : hairstyle_.strips) {
+    largest = std::max(largest, static_cast<std::size_t>(s.pointCount()));
     strip_offset_.push_back(offset);
     for (int p = 0; p < s.pointCount(); ++p)
       strip_of_point_[static_cast<std::size_t>(offset + p)] = static_cast<int>(strip_offset_.size() - 1);
@@ -139,6 +141,7 @@ void Simulator::buildChains() {
     }
     offset += s.pointCount();
   }
+  exact_placed_.reserve(largest);  // (stepStrip's push_back never reallocates)
   updateSegmentConstants();
   buildLanes();
 }
@@ -333,15 +336,20 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       stepStrip(in, f, si, strip_offset_[si], tally, from, true);
       ++exact_strips_;
       // Its state at the end of the substep into the lanes' buffers, which become the state below (the
-      // helpers are done with its blocks: they were read above).
-      const auto at = [](auto& v, std::size_t k) { return v.begin() + static_cast<std::ptrdiff_t>(k); };
-      const std::size_t begin = static_cast<std::size_t>(base);
-      const std::size_t end = begin + static_cast<std::size_t>(s.pointCount());
-      std::copy(at(positions_, begin), at(positions_, end), at(new_position_, begin));
-      std::copy(at(direction_, begin), at(direction_, end), at(new_direction_, begin));
-      std::copy(at(rate_, begin), at(rate_, end), at(new_rate_, begin));
-      std::copy(at(velocity_, begin), at(velocity_, end), at(new_velocity_, begin));
-      std::copy(at(previous_mid_, begin), at(previous_mid_, end), at(new_mid_, begin));
+      // helpers are done with its blocks: they were read above): the points the exact step placed, or the
+      // whole strip after relaxStrip (the points committed from the lanes are there already).
+      const auto copyBack = [this](std::size_t i) {
+        new_position_[i] = positions_[i];
+        new_direction_[i] = direction_[i];
+        new_rate_[i] = rate_[i];
+        new_velocity_[i] = velocity_[i];
+        new_mid_[i] = previous_mid_[i];
+      };
+      if (exact_relaxed_) {
+        for (int p = 0; p < s.pointCount(); ++p) copyBack(static_cast<std::size_t>(base + p));
+      } else {
+        for (int i : exact_placed_) copyBack(static_cast<std::size_t>(i));
+      }
       continue;
     }
     // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
@@ -648,6 +656,7 @@ void Simulator::buildSprings() {
   }
   partner_index_.assign(static_cast<std::size_t>(partner_start_[n]), 0);
   partner_rest_.assign(static_cast<std::size_t>(partner_start_[n]), 0.0);
+  partner_strip_.assign(static_cast<std::size_t>(partner_start_[n]), 0);
   std::vector<int> fill(partner_start_.begin(), partner_start_.end() - 1);
   for (const SpringPair& p : springs_) {
     const std::size_t fa = static_cast<std::size_t>(fill[static_cast<std::size_t>(p.a)]++);
@@ -657,6 +666,8 @@ void Simulator::buildSprings() {
     partner_index_[fb] = p.a;
     partner_rest_[fb] = p.within_strip ? p.rest : -p.rest;
   }
+  for (std::size_t q = 0; q < partner_index_.size(); ++q)
+    partner_strip_[q] = strip_of_point_[static_cast<std::size_t>(partner_index_[q])];
   buildBandPairs();
 }
 
@@ -1010,9 +1021,9 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
       for (int q = p_begin; q < p_end; ++q) {
         // Each pair is kept by the later of its two points in the sweep, against the final position
         // of the earlier one: partners not yet moved in this substep keep the pair themselves.
-        const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
-        if (!placedInStep(j)) continue;
-        const Vec3& other = placedPosition(j);
+        const Vec3* placed = placedPartner(static_cast<std::size_t>(q));
+        if (!placed) continue;
+        const Vec3& other = *placed;
         const Vec3 end = pivot + d * u;
         const double r = bandTarget((end - other).norm(), partner_rest_[static_cast<std::size_t>(q)]);
         if (r == 0.0) continue;
@@ -1532,15 +1543,17 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
   // Whether resolveCollisions' band projection would move the end `end` of point i (its first sweep's test).
   auto bandActs = [&](std::size_t i, const Vec3& end) {
     for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
-      const std::size_t j = static_cast<std::size_t>(partner_index_[static_cast<std::size_t>(q)]);
-      if (!placedInStep(j)) continue;
-      if (bandTarget((end - placedPosition(j)).norm(), partner_rest_[static_cast<std::size_t>(q)]) != 0.0)
-        return true;
+      const Vec3* placed = placedPartner(static_cast<std::size_t>(q));
+      if (!placed) continue;
+      if (bandTarget((end - *placed).norm(), partner_rest_[static_cast<std::size_t>(q)]) != 0.0) return true;
     }
     return false;
   };
   // Point i's state at the end of the substep: direction `next` from `pivot`, turned by w.
+  exact_placed_.clear();
+  exact_relaxed_ = false;
   auto place = [&](std::size_t i, const Vec3& pivot, double d, const Vec3& next, const Vec3& w) {
+    exact_placed_.push_back(static_cast<int>(i));
     tally.max_rate2 = std::max(tally.max_rate2, w.squaredNorm());
     rate_[i] = w;
     direction_[i] = next;
@@ -1660,6 +1673,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
     }
   }
   if (outside_band) {
+    exact_relaxed_ = true;
     relaxStrip(si, bodies_now, bodies_before);
     for (int p = s.columns; p < s.pointCount(); ++p) {
       const std::size_t i = static_cast<std::size_t>(offset + p);

@@ -213,16 +213,14 @@ class Simulator {
   /// Point i takes the lanes' result (new_*_) as its state at the end of the substep (the exact step of its
   /// strip); returns |w|^2.
   double commitLanes(std::size_t i);
-  /// During a substep: whether point j already has its place at the end of it (placed by the exact step, or
-  /// in a strip committed from the lanes), and that place (new_position_ for a strip committed from the
-  /// lanes, which stepLanes' buffer swap makes the state at the end).
-  bool placedInStep(std::size_t j) const {
-    return moved_in_step_[j] == sweep_ ||
-           strip_committed_[static_cast<std::size_t>(strip_of_point_[j])] == sweep_;
-  }
-  const Vec3& placedPosition(std::size_t j) const {
-    return strip_committed_[static_cast<std::size_t>(strip_of_point_[j])] == sweep_ ? new_position_[j]
-                                                                                    : positions_[j];
+  /// During a substep: the place at the end of it of partner q (partner_index_[q]) when it already has one,
+  /// else null: new_position_ in a strip committed from the lanes (stepLanes' buffer swap makes it the state
+  /// at the end), positions_ where the exact step placed it. The partner's strip is read from partner_strip_
+  /// (next to q in memory), and moved_in_step_ only outside a committed strip.
+  const Vec3* placedPartner(std::size_t q) const {
+    const std::size_t j = static_cast<std::size_t>(partner_index_[q]);
+    if (strip_committed_[static_cast<std::size_t>(partner_strip_[q])] == sweep_) return &new_position_[j];
+    return moved_in_step_[j] == sweep_ ? &positions_[j] : nullptr;
   }
   /// The lanes' buffers (new_*_) equal to the state (reset: the roots, which no substep writes, must be the
   /// same in both when stepLanes swaps them).
@@ -342,12 +340,17 @@ class Simulator {
   /// clearOf's tests: 0 all, 1 without the swept test, 2 the end point alone (resolveCollisions' fallbacks).
   int clear_level_ = 0;
   std::vector<Vec3> row_dirs_;  ///< relaxStrip: a row's directions before the parallel fallback
+  /// stepStrip: the points of the strip it placed itself (the others took the lanes' results, so their
+  /// state already equals the lanes' buffers), and whether relaxStrip moved it (then any point may differ).
+  std::vector<int> exact_placed_;
+  bool exact_relaxed_ = false;
   /// relaxStrip: row r's far edge is the narrowest of rows r..tighten_to_[r] (empty: each row its own).
   std::vector<int> tighten_to_;
   // The current strip at the start of the substep (positions, directions, segment midpoints).
   std::vector<Vec3> start_pos_, start_dir_, start_mid_;
   std::vector<int> partner_start_;  ///< CSR: partners of point k are [start[k], start[k+1])
   std::vector<int> partner_index_;
+  std::vector<int> partner_strip_;  ///< strip_of_point_ of partner_index_
   std::vector<double> partner_rest_;
   /// stepLanes' band check: a spring pair by the strip of its later point, neither a root.
   struct BandPair {
