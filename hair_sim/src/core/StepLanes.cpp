@@ -129,6 +129,67 @@ template <int N, class V>
 HAIR_SIM_ALWAYS_INLINE V gatherVec3(const Vec3* a, int c, const int* idx) {
   return gatherLanes<N, V>(reinterpret_cast<const double*>(a), 3, c, idx);
 }
+/// x, y and z of the Vec3s at idx[l] of a, lane by lane; with `pairs` (every lane active, lanes 2m and 2m + 1
+/// reading consecutive points, as the two columns of a strip do) by whole loads and shuffles instead of a
+/// load per value: the same values.
+template <int N, class V>
+HAIR_SIM_ALWAYS_INLINE void loadVec3(const Vec3* a, const int* idx, bool pairs, V& x, V& y, V& z) {
+  typedef typename VecTypes<N>::M M;
+  if (!pairs) {
+    x = gatherVec3<N, V>(a, 0, idx), y = gatherVec3<N, V>(a, 1, idx), z = gatherVec3<N, V>(a, 2, idx);
+    return;
+  }
+  const double* p = reinterpret_cast<const double*>(a + idx[0]);
+  if constexpr (N == 4) {
+    const double* q = reinterpret_cast<const double*>(a + idx[2]);
+    V lo, hi;  // x0 y0 z0 x1, x2 y2 z2 x3
+    __builtin_memcpy(&lo, p, sizeof(V));
+    __builtin_memcpy(&hi, q, sizeof(V));
+    const V tail = {p[4], p[5], q[4], q[5]};                 // y1 z1 y3 z3
+    const V mix = __builtin_shuffle(lo, hi, M{1, 5, 2, 6});  // y0 y2 z0 z2
+    x = __builtin_shuffle(lo, hi, M{0, 3, 4, 7});
+    y = __builtin_shuffle(mix, tail, M{0, 4, 1, 6});
+    z = __builtin_shuffle(mix, tail, M{2, 5, 3, 7});
+  } else {
+    V a0, a1, a2;  // x0 y0, z0 x1, y1 z1
+    __builtin_memcpy(&a0, p, sizeof(V));
+    __builtin_memcpy(&a1, p + 2, sizeof(V));
+    __builtin_memcpy(&a2, p + 4, sizeof(V));
+    x = __builtin_shuffle(a0, a1, M{0, 3});
+    y = __builtin_shuffle(a0, a2, M{1, 2});
+    z = __builtin_shuffle(a1, a2, M{0, 3});
+  }
+}
+/// The Vec3 (x[l], y[l], z[l]) to a[idx[l]] for the lanes with idx[l] >= 0; with `pairs` (as loadVec3's) by
+/// shuffles and whole stores.
+template <int N, class V>
+HAIR_SIM_ALWAYS_INLINE void storeVec3(Vec3* a, const int* idx, bool pairs, V x, V y, V z) {
+  typedef typename VecTypes<N>::M M;
+  if (!pairs) {
+    for (int l = 0; l < N; ++l)
+      if (idx[l] >= 0) a[idx[l]] = Vec3(x[l], y[l], z[l]);
+    return;
+  }
+  double* p = reinterpret_cast<double*>(a + idx[0]);
+  if constexpr (N == 4) {
+    double* q = reinterpret_cast<double*>(a + idx[2]);
+    const V xy = __builtin_shuffle(x, y, M{0, 4, 2, 6});  // x0 y0 x2 y2
+    const V zx = __builtin_shuffle(z, x, M{0, 5, 2, 7});  // z0 x1 z2 x3
+    const V lo = __builtin_shuffle(xy, zx, M{0, 1, 4, 5});
+    const V hi = __builtin_shuffle(xy, zx, M{2, 3, 6, 7});
+    const V yz = __builtin_shuffle(y, z, M{1, 5, 3, 7});  // y1 z1 y3 z3
+    __builtin_memcpy(p, &lo, sizeof(V));
+    __builtin_memcpy(q, &hi, sizeof(V));
+    p[4] = yz[0], p[5] = yz[1], q[4] = yz[2], q[5] = yz[3];
+  } else {
+    const V s0 = __builtin_shuffle(x, y, M{0, 2});
+    const V s1 = __builtin_shuffle(z, x, M{0, 3});
+    const V s2 = __builtin_shuffle(y, z, M{1, 3});
+    __builtin_memcpy(p, &s0, sizeof(V));
+    __builtin_memcpy(p + 2, &s1, sizeof(V));
+    __builtin_memcpy(p + 4, &s2, sizeof(V));
+  }
+}
 /// N consecutive doubles (a block's constant in lane order).
 template <class V>
 HAIR_SIM_ALWAYS_INLINE V loadLanes(const double* at) {
@@ -176,21 +237,17 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     }
     if (active_count == 0) break;
     const bool all_active = active_count == N;
-    nx = gatherVec3<N, V>(job.direction, 0, idx), ny = gatherVec3<N, V>(job.direction, 1, idx),
-    nz = gatherVec3<N, V>(job.direction, 2, idx);
-    vx = gatherVec3<N, V>(job.velocity, 0, idx), vy = gatherVec3<N, V>(job.velocity, 1, idx),
-    vz = gatherVec3<N, V>(job.velocity, 2, idx);
-    wx = gatherVec3<N, V>(job.rate, 0, idx), wy = gatherVec3<N, V>(job.rate, 1, idx),
-    wz = gatherVec3<N, V>(job.rate, 2, idx);
-    fx = gatherVec3<N, V>(job.spring_force, 0, idx), fy = gatherVec3<N, V>(job.spring_force, 1, idx),
-    fz = gatherVec3<N, V>(job.spring_force, 2, idx);
+    bool pairs = all_active;
+    for (int l = 0; l < N; l += 2) pairs = pairs && pt[l + 1] == pt[l] + 1;
+    loadVec3<N>(job.direction, idx, pairs, nx, ny, nz);
+    loadVec3<N>(job.velocity, idx, pairs, vx, vy, vz);
+    loadVec3<N>(job.rate, idx, pairs, wx, wy, wz);
+    loadVec3<N>(job.spring_force, idx, pairs, fx, fy, fz);
     const double* k_row = job.constants + static_cast<std::ptrdiff_t>(r) * kConstants * W + l0;
     ux = loadLanes<V>(k_row + 0 * W), uy = loadLanes<V>(k_row + 1 * W), uz = loadLanes<V>(k_row + 2 * W);
     sx = loadLanes<V>(k_row + 3 * W), sy = loadLanes<V>(k_row + 4 * W), sz = loadLanes<V>(k_row + 5 * W);
-    mx = gatherVec3<N, V>(job.previous_mid, 0, idx), my = gatherVec3<N, V>(job.previous_mid, 1, idx),
-    mz = gatherVec3<N, V>(job.previous_mid, 2, idx);
-    ex = gatherVec3<N, V>(job.positions, 0, idx), ey = gatherVec3<N, V>(job.positions, 1, idx),
-    ez = gatherVec3<N, V>(job.positions, 2, idx);
+    loadVec3<N>(job.previous_mid, idx, pairs, mx, my, mz);
+    loadVec3<N>(job.positions, idx, pairs, ex, ey, ez);
     d = loadLanes<V>(k_row + 6 * W);
     ii = loadLanes<V>(k_row + 7 * W);
     if (!all_active) {  // an idle lane: a still vertical segment, never written back
@@ -390,16 +447,13 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     const V midx = px + hd * kx, midy = py + hd * ky, midz = pz + hd * kz;
     const V velx = (midx - mx) / dt, vely = (midy - my) / dt, velz = (midz - mz) / dt;
     const M code = (full & kPointFull) | (hit & ~full & kPointBodies);
-    for (int l = 0; l < N; ++l) {
-      const int i = pt[l];
-      if (i < 0) continue;
-      job.out_direction[i] = Vec3(kx[l], ky[l], kz[l]);
-      job.out_rate[i] = Vec3(Wx[l], Wy[l], Wz[l]);
-      job.out_position[i] = Vec3(nex[l], ney[l], nez[l]);
-      job.out_velocity[i] = Vec3(velx[l], vely[l], velz[l]);
-      job.out_mid[i] = Vec3(midx[l], midy[l], midz[l]);
-      job.out_flag[i] = static_cast<unsigned char>(code[l]);
-    }
+    storeVec3<N>(job.out_direction, pt, pairs, kx, ky, kz);
+    storeVec3<N>(job.out_rate, pt, pairs, Wx, Wy, Wz);
+    storeVec3<N>(job.out_position, pt, pairs, nex, ney, nez);
+    storeVec3<N>(job.out_velocity, pt, pairs, velx, vely, velz);
+    storeVec3<N>(job.out_mid, pt, pairs, midx, midy, midz);
+    for (int l = 0; l < N; ++l)
+      if (pt[l] >= 0) job.out_flag[pt[l]] = static_cast<unsigned char>(code[l]);
     px = nex, py = ney, pz = nez;
     for (int l = 0; l < N; ++l)
       if (flag[l] && first_row[l] == 0) first_row[l] = r;
