@@ -1004,6 +1004,27 @@ Vec3 Simulator::clearBodies(const Vec3& pivot, double d, const Vec3& dir, const 
   return result;
 }
 
+namespace {
+/// resolveCollisions' walk round the band's circle: step k at the angle (pi / 16) ((k + 1) / 2) (-1 for even
+/// k, +1 for odd), its cosine and sine computed once (std::cos, std::sin: the values the walk computed each
+/// time before).
+constexpr int kCircleSteps = 32;
+struct CircleStep {
+  double cos, sin;
+};
+const CircleStep* circleSteps() {
+  static const std::array<CircleStep, kCircleSteps + 1> steps = [] {
+    std::array<CircleStep, kCircleSteps + 1> t{};
+    for (int k = 0; k <= kCircleSteps; ++k) {
+      const double angle = (kPi / 16.0) * ((k + 1) / 2) * (k % 2 ? 1.0 : -1.0);
+      t[static_cast<std::size_t>(k)] = {std::cos(angle), std::sin(angle)};
+    }
+    return t;
+  }();
+  return steps.data();
+}
+}  // namespace
+
 Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
                                   const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
   auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, !before.empty()); };
@@ -1048,9 +1069,9 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
         // farther and farther round from it (steps of pi/16 each way) until one is clear.
         const Vec3 side = axis.cross(perp);
         Vec3 chosen = (h * axis + rho * perp).normalized();
-        for (int k = 0; k <= 32; ++k) {
-          const double angle = (kPi / 16.0) * ((k + 1) / 2) * (k % 2 ? 1.0 : -1.0);
-          const Vec3 cand = (h * axis + rho * (std::cos(angle) * perp + std::sin(angle) * side)).normalized();
+        for (int k = 0; k <= kCircleSteps; ++k) {
+          const CircleStep& step = circleSteps()[k];
+          const Vec3 cand = (h * axis + rho * (step.cos * perp + step.sin * side)).normalized();
           if (validBodies(cand)) {
             chosen = cand;
             break;
