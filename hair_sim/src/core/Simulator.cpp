@@ -337,7 +337,8 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       ++exact_strips_;
       // Its state at the end of the substep into the lanes' buffers, which become the state below (the
       // helpers are done with its blocks: they were read above): the points the exact step placed, or the
-      // whole strip after relaxStrip (the points committed from the lanes are there already).
+      // whole strip after relaxStrip. The points committed from the lanes are there already, and so are the
+      // roots, which no substep writes (syncLaneBuffers made them equal in both).
       const auto copyBack = [this](std::size_t i) {
         new_position_[i] = positions_[i];
         new_direction_[i] = direction_[i];
@@ -1069,8 +1070,9 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
         // farther and farther round from it (steps of pi/16 each way) until one is clear.
         const Vec3 side = axis.cross(perp);
         Vec3 chosen = (h * axis + rho * perp).normalized();
+        const CircleStep* steps = circleSteps();
         for (int k = 0; k <= kCircleSteps; ++k) {
-          const CircleStep& step = circleSteps()[k];
+          const CircleStep& step = steps[k];
           const Vec3 cand = (h * axis + rho * (step.cos * perp + step.sin * side)).normalized();
           if (validBodies(cand)) {
             chosen = cand;

@@ -23,6 +23,7 @@ constexpr int W = kLanes;
 // on all lanes at once. The AVX2 code takes N = 4 (one ymm register), the baseline code N = 2 (one xmm),
 // twice per block: the lanes never mix, so the results are the same.
 static_assert(sizeof(long) == 8, "lane masks are 64-bit");
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles (loadVec3, storeVec3)");
 template <int N>
 struct VecTypes;
 template <>
@@ -129,12 +130,18 @@ template <int N, class V>
 HAIR_SIM_ALWAYS_INLINE V gatherVec3(const Vec3* a, int c, const int* idx) {
   return gatherLanes<N, V>(reinterpret_cast<const double*>(a), 3, c, idx);
 }
+/// N consecutive doubles (a block's constant in lane order).
+template <class V>
+HAIR_SIM_ALWAYS_INLINE V loadLanes(const double* at) {
+  V v;
+  __builtin_memcpy(&v, at, sizeof(V));
+  return v;
+}
 /// x, y and z of the Vec3s at idx[l] of a, lane by lane; with `pairs` (every lane active, lanes 2m and 2m + 1
 /// reading consecutive points, as the two columns of a strip do) by whole loads and shuffles instead of a
-/// load per value: the same values.
+/// load per value: the same values. (Two consecutive Vec3s are six packed doubles.)
 template <int N, class V>
 HAIR_SIM_ALWAYS_INLINE void loadVec3(const Vec3* a, const int* idx, bool pairs, V& x, V& y, V& z) {
-  typedef typename VecTypes<N>::M M;
   if (!pairs) {
     x = gatherVec3<N, V>(a, 0, idx), y = gatherVec3<N, V>(a, 1, idx), z = gatherVec3<N, V>(a, 2, idx);
     return;
@@ -142,29 +149,23 @@ HAIR_SIM_ALWAYS_INLINE void loadVec3(const Vec3* a, const int* idx, bool pairs, 
   const double* p = reinterpret_cast<const double*>(a + idx[0]);
   if constexpr (N == 4) {
     const double* q = reinterpret_cast<const double*>(a + idx[2]);
-    V lo, hi;  // x0 y0 z0 x1, x2 y2 z2 x3
-    __builtin_memcpy(&lo, p, sizeof(V));
-    __builtin_memcpy(&hi, q, sizeof(V));
-    const V tail = {p[4], p[5], q[4], q[5]};                 // y1 z1 y3 z3
-    const V mix = __builtin_shuffle(lo, hi, M{1, 5, 2, 6});  // y0 y2 z0 z2
-    x = __builtin_shuffle(lo, hi, M{0, 3, 4, 7});
-    y = __builtin_shuffle(mix, tail, M{0, 4, 1, 6});
-    z = __builtin_shuffle(mix, tail, M{2, 5, 3, 7});
+    const V lo = loadLanes<V>(p), hi = loadLanes<V>(q);         // x0 y0 z0 x1, x2 y2 z2 x3
+    const V tail = {p[4], p[5], q[4], q[5]};                    // y1 z1 y3 z3
+    const V mix = __builtin_shufflevector(lo, hi, 1, 5, 2, 6);  // y0 y2 z0 z2
+    x = __builtin_shufflevector(lo, hi, 0, 3, 4, 7);
+    y = __builtin_shufflevector(mix, tail, 0, 4, 1, 6);
+    z = __builtin_shufflevector(mix, tail, 2, 5, 3, 7);
   } else {
-    V a0, a1, a2;  // x0 y0, z0 x1, y1 z1
-    __builtin_memcpy(&a0, p, sizeof(V));
-    __builtin_memcpy(&a1, p + 2, sizeof(V));
-    __builtin_memcpy(&a2, p + 4, sizeof(V));
-    x = __builtin_shuffle(a0, a1, M{0, 3});
-    y = __builtin_shuffle(a0, a2, M{1, 2});
-    z = __builtin_shuffle(a1, a2, M{0, 3});
+    const V a0 = loadLanes<V>(p), a1 = loadLanes<V>(p + 2), a2 = loadLanes<V>(p + 4);  // x0 y0, z0 x1, y1 z1
+    x = __builtin_shufflevector(a0, a1, 0, 3);
+    y = __builtin_shufflevector(a0, a2, 1, 2);
+    z = __builtin_shufflevector(a1, a2, 0, 3);
   }
 }
 /// The Vec3 (x[l], y[l], z[l]) to a[idx[l]] for the lanes with idx[l] >= 0; with `pairs` (as loadVec3's) by
 /// shuffles and whole stores.
 template <int N, class V>
 HAIR_SIM_ALWAYS_INLINE void storeVec3(Vec3* a, const int* idx, bool pairs, V x, V y, V z) {
-  typedef typename VecTypes<N>::M M;
   if (!pairs) {
     for (int l = 0; l < N; ++l)
       if (idx[l] >= 0) a[idx[l]] = Vec3(x[l], y[l], z[l]);
@@ -173,29 +174,22 @@ HAIR_SIM_ALWAYS_INLINE void storeVec3(Vec3* a, const int* idx, bool pairs, V x, 
   double* p = reinterpret_cast<double*>(a + idx[0]);
   if constexpr (N == 4) {
     double* q = reinterpret_cast<double*>(a + idx[2]);
-    const V xy = __builtin_shuffle(x, y, M{0, 4, 2, 6});  // x0 y0 x2 y2
-    const V zx = __builtin_shuffle(z, x, M{0, 5, 2, 7});  // z0 x1 z2 x3
-    const V lo = __builtin_shuffle(xy, zx, M{0, 1, 4, 5});
-    const V hi = __builtin_shuffle(xy, zx, M{2, 3, 6, 7});
-    const V yz = __builtin_shuffle(y, z, M{1, 5, 3, 7});  // y1 z1 y3 z3
+    const V xy = __builtin_shufflevector(x, y, 0, 4, 2, 6);  // x0 y0 x2 y2
+    const V zx = __builtin_shufflevector(z, x, 0, 5, 2, 7);  // z0 x1 z2 x3
+    const V lo = __builtin_shufflevector(xy, zx, 0, 1, 4, 5);
+    const V hi = __builtin_shufflevector(xy, zx, 2, 3, 6, 7);
+    const V yz = __builtin_shufflevector(y, z, 1, 5, 3, 7);  // y1 z1 y3 z3
     __builtin_memcpy(p, &lo, sizeof(V));
     __builtin_memcpy(q, &hi, sizeof(V));
     p[4] = yz[0], p[5] = yz[1], q[4] = yz[2], q[5] = yz[3];
   } else {
-    const V s0 = __builtin_shuffle(x, y, M{0, 2});
-    const V s1 = __builtin_shuffle(z, x, M{0, 3});
-    const V s2 = __builtin_shuffle(y, z, M{1, 3});
+    const V s0 = __builtin_shufflevector(x, y, 0, 2);
+    const V s1 = __builtin_shufflevector(z, x, 0, 3);
+    const V s2 = __builtin_shufflevector(y, z, 1, 3);
     __builtin_memcpy(p, &s0, sizeof(V));
     __builtin_memcpy(p + 2, &s1, sizeof(V));
     __builtin_memcpy(p + 4, &s2, sizeof(V));
   }
-}
-/// N consecutive doubles (a block's constant in lane order).
-template <class V>
-HAIR_SIM_ALWAYS_INLINE V loadLanes(const double* at) {
-  V v;
-  __builtin_memcpy(&v, at, sizeof(V));
-  return v;
 }
 
 /// Lanes l0 .. l0 + N - 1 of the block; have_before = job.have_before.

@@ -200,7 +200,9 @@ class Simulator {
   /// (column * rows + row) take the lanes' results (new_*_), the others the exact step. With from_lanes
   /// (the lanes ran for the strip), a place after `from` whose column kept the lanes' results above it
   /// starts from the lanes' free step unless its lane_flag_ says kPointFull: committed as it is when no body
-  /// is in the way and no spring band would move it, else resolveCollisions from it.
+  /// is in the way and no spring band would move it, else resolveCollisions from it. Lists the points it
+  /// places itself in exact_placed_ and sets exact_relaxed_ when relaxStrip ran (stepLanes copies those
+  /// back).
   void stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset, StepTally& tally,
                  int from = 0, bool from_lanes = false);
   /// The penetration tally of a segment's end after resolveCollisions (the bodies near_ of its pivot).
@@ -215,8 +217,9 @@ class Simulator {
   double commitLanes(std::size_t i);
   /// During a substep: the place at the end of it of partner q (partner_index_[q]) when it already has one,
   /// else null: new_position_ in a strip committed from the lanes (stepLanes' buffer swap makes it the state
-  /// at the end), positions_ where the exact step placed it. The partner's strip is read from partner_strip_
-  /// (next to q in memory), and moved_in_step_ only outside a committed strip.
+  /// at the end), positions_ where the exact step placed it. The partner's strip is read from partner_strip_,
+  /// indexed by q like partner_index_ (in order, where strip_of_point_[j] is read at scattered j), and
+  /// moved_in_step_ only outside a committed strip.
   const Vec3* placedPartner(std::size_t q) const {
     const std::size_t j = static_cast<std::size_t>(partner_index_[q]);
     if (strip_committed_[static_cast<std::size_t>(partner_strip_[q])] == sweep_) return &new_position_[j];
@@ -341,7 +344,8 @@ class Simulator {
   int clear_level_ = 0;
   std::vector<Vec3> row_dirs_;  ///< relaxStrip: a row's directions before the parallel fallback
   /// stepStrip: the points of the strip it placed itself (the others took the lanes' results, so their
-  /// state already equals the lanes' buffers), and whether relaxStrip moved it (then any point may differ).
+  /// state already equals the lanes' buffers, as the roots' does), and whether relaxStrip moved it (then any
+  /// point may differ).
   std::vector<int> exact_placed_;
   bool exact_relaxed_ = false;
   /// relaxStrip: row r's far edge is the narrowest of rows r..tighten_to_[r] (empty: each row its own).
@@ -390,7 +394,7 @@ class Simulator {
   int lane_stride_rows_ = 0;  ///< rows per block in lane_point_
   /// The lanes' results, the state at the end of the substep for the strips committed from them: stepLanes
   /// swaps them with the state (positions_, direction_, rate_, velocity_, previous_mid_) after copying in the
-  /// strips that took the exact step.
+  /// points the exact step placed (the whole strip after relaxStrip).
   std::vector<Vec3> new_position_, new_direction_, new_rate_, new_velocity_, new_mid_;
   /// Per strip, the sweep (sweep_) in which it was last committed from the lanes (-1: none).
   std::vector<long> strip_committed_;
