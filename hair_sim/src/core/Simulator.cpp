@@ -727,7 +727,10 @@ std::size_t scanSpringRange(const Vec3* positions, const int* a, const int* b, c
     min_r2 = std::min(min_r2, r2);
     max_r2 = std::max(max_r2, r2);
     if constexpr (kBetween) min_l2 = std::min(min_l2, l2);
-    if (r2 < lo2 || r2 > hi2) outside[found++] = static_cast<int>(k);
+    // Listed without a branch (about one pair in eight is outside at 10,000 strips, at random): always
+    // written, counted only when outside.
+    outside[found] = static_cast<int>(k);
+    found += static_cast<std::size_t>((r2 < lo2) | (r2 > hi2));
   }
   return found;
 }
