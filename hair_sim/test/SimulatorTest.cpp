@@ -789,7 +789,9 @@ TEST(SimulatorTest, SetParametersWithoutSpringsDropsTheirForce) {
 
 TEST(SimulatorTest, SpringRatiosAndGapAreThoseOfTheStateTheSubstepBegan) {
   // minSpringRatio, maxSpringRatio, minStripGap against the pairs measured directly on the positions the last
-  // substep began from (the default hairstyle shaken: its strips' widths move), on every step path.
+  // substep began from (the default hairstyle shaken: its strips' widths move), on every step path. Before
+  // the last substep setShape spreads the hair sideways: the pairs' lengths that the lanes keep for the next
+  // substep's scan must not outlive it.
   for (Simulator::StepPath path :
        {Simulator::StepPath::Lanes, Simulator::StepPath::LanesBaseline, Simulator::StepPath::Exact}) {
     Simulator sim = defaultSimulator();
@@ -802,6 +804,11 @@ TEST(SimulatorTest, SpringRatiosAndGapAreThoseOfTheStateTheSubstepBegan) {
       pose.linear() = rotationFromRpy(Vec3(0.0, 0.0, 1.5 * std::sin(i * 0.08)));
       StepInputs in;
       in.head = head.update(pose, sim.parameters().substep);
+      if (i == 120) {
+        std::vector<Vec3> spread = sim.positionsHead();
+        for (Vec3& q : spread) q.y() *= 1.25;
+        sim.setShape(spread);
+      }
       before = sim.positionsHead();
       sim.step(in);
     }

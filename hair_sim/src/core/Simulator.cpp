@@ -328,6 +328,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       const Vec3& a = new_position_[static_cast<std::size_t>(bp.later)];
       const Vec3& b = new_position_[static_cast<std::size_t>(bp.earlier)];
       const double dist2 = (a - b).squaredNorm();
+      spring_dist2_[static_cast<std::size_t>(bp.spring)] = dist2;
       if (dist2 < bp.near2 || dist2 > bp.far2)  // kept by the later point of the pair in the sweep
         from = std::min(
             from, bp.same_strip ? std::max(sweepKey(bp.later), sweepKey(bp.earlier)) : sweepKey(bp.later));
@@ -351,6 +352,13 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       } else {
         for (int i : exact_placed_) copyBack(static_cast<std::size_t>(i));
       }
+      for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {  // its pairs' final lengths
+        const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
+        spring_dist2_[static_cast<std::size_t>(bp.spring)] =
+            (new_position_[static_cast<std::size_t>(bp.later)] -
+             new_position_[static_cast<std::size_t>(bp.earlier)])
+                .squaredNorm();
+      }
       continue;
     }
     // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
@@ -367,6 +375,15 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   rate_.swap(new_rate_);
   velocity_.swap(new_velocity_);
   previous_mid_.swap(new_mid_);
+  // The pairs with a root (no band pair) at the state's places: spring_dist2_ is then whole for the next
+  // scan.
+  for (int k : root_springs_) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    spring_dist2_[kk] = (positions_[static_cast<std::size_t>(spring_b_[kk])] -
+                         positions_[static_cast<std::size_t>(spring_a_[kk])])
+                            .squaredNorm();
+  }
+  spring_dist2_sweep_ = sweep_;
 }
 
 void Simulator::syncLaneBuffers() {
@@ -464,6 +481,7 @@ void Simulator::setParameters(const PhysicsParameters& parameters) {
 }
 
 void Simulator::reset() {
+  spring_dist2_sweep_ = -1;  // (the hair moves: the next scan reads the points)
   int offset = 0;
   for (const Strip& s : hairstyle_.strips) {
     for (int p = 0; p < s.pointCount(); ++p)
@@ -683,9 +701,17 @@ void Simulator::buildBandPairs() {
     return k - strip_offset_[t] < hairstyle_.strips[t].columns;
   };
   std::vector<BandPair> pairs;
-  for (const SpringPair& p : springs_) {
-    if (isRoot(p.a) || isRoot(p.b)) continue;
+  root_springs_.clear();
+  spring_dist2_.assign(springs_.size(), 0.0);
+  spring_dist2_sweep_ = -1;
+  for (std::size_t k = 0; k < springs_.size(); ++k) {
+    const SpringPair& p = springs_[k];
+    if (isRoot(p.a) || isRoot(p.b)) {
+      root_springs_.push_back(static_cast<int>(k));
+      continue;
+    }
     BandPair bp;
+    bp.spring = static_cast<int>(k);
     bp.later = std::max(p.a, p.b);  // points are numbered strip by strip
     bp.earlier = std::min(p.a, p.b);
     bp.near2 = (lo * p.rest) * (lo * p.rest) * (1.0 + 1e-9);
@@ -717,12 +743,12 @@ struct SpringExtremes {
 /// Updates the extremes and writes the pairs outside the band (r2 < lo2 or r2 > hi2) to `outside` in order;
 /// returns how many. (Scalar: in lanes of AVX2, gathering the points, it took more time on this machine.)
 template <bool kBetween>
-std::size_t scanSpringRange(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
-                            std::size_t begin, std::size_t end, double lo2, double hi2, double& min_r2,
-                            double& max_r2, double& min_l2, int* outside, std::size_t found) {
+std::size_t scanSpringRange(const Vec3* positions, const double* dist2, const int* a, const int* b,
+                            const double* inv_rest2, std::size_t begin, std::size_t end, double lo2,
+                            double hi2, double& min_r2, double& max_r2, double& min_l2, int* outside,
+                            std::size_t found) {
   for (std::size_t k = begin; k < end; ++k) {
-    const Vec3 delta = positions[b[k]] - positions[a[k]];
-    const double l2 = delta.squaredNorm();
+    const double l2 = dist2 ? dist2[k] : (positions[b[k]] - positions[a[k]]).squaredNorm();
     const double r2 = l2 * inv_rest2[k];
     min_r2 = std::min(min_r2, r2);
     max_r2 = std::max(max_r2, r2);
@@ -735,15 +761,15 @@ std::size_t scanSpringRange(const Vec3* positions, const int* a, const int* b, c
   return found;
 }
 
-std::size_t scanSprings(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
-                        std::size_t begin, std::size_t within, std::size_t end, double lo2, double hi2,
-                        SpringExtremes& e, int* outside) {
+std::size_t scanSprings(const Vec3* positions, const double* dist2, const int* a, const int* b,
+                        const double* inv_rest2, std::size_t begin, std::size_t within, std::size_t end,
+                        double lo2, double hi2, SpringExtremes& e, int* outside) {
   double unused = 0.0;
   const std::size_t split = std::min(std::max(begin, within), end);
-  const std::size_t found = scanSpringRange<false>(positions, a, b, inv_rest2, begin, split, lo2, hi2,
+  const std::size_t found = scanSpringRange<false>(positions, dist2, a, b, inv_rest2, begin, split, lo2, hi2,
                                                    e.min_within, e.max_within, unused, outside, 0);
-  return scanSpringRange<true>(positions, a, b, inv_rest2, split, end, lo2, hi2, e.min_between, e.max_between,
-                               e.min_gap2, outside, found);
+  return scanSpringRange<true>(positions, dist2, a, b, inv_rest2, split, end, lo2, hi2, e.min_between,
+                               e.max_between, e.min_gap2, outside, found);
 }
 
 }  // namespace
@@ -768,11 +794,14 @@ void Simulator::computeSpringForces() {
   };
   std::array<Part, 64> part;
   const double lo2 = lo * lo, hi2 = hi * hi;
+  // The lengths stepLanes kept when they are those of the state (the last substep took the lanes and nothing
+  // has moved the hair since), else from the points.
+  const double* dist2 = spring_dist2_sweep_ == sweep_ ? spring_dist2_.data() : nullptr;
   auto scan = [&](std::size_t c) {
     Part& pc = part[c];
     pc.found =
-        scanSprings(positions_.data(), spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(), pc.begin,
-                    spring_within_, pc.end, lo2, hi2, pc.e, spring_outside_.data() + pc.begin);
+        scanSprings(positions_.data(), dist2, spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(),
+                    pc.begin, spring_within_, pc.end, lo2, hi2, pc.e, spring_outside_.data() + pc.begin);
   };
   for (std::size_t c = 0; c < parts; ++c) {
     part[c].begin = count * c / parts;
@@ -1435,6 +1464,7 @@ void Simulator::setShape(const std::vector<Vec3>& target) {
   for (std::size_t i = 0; i < target.size(); ++i)
     if (!target[i].allFinite())
       throw std::invalid_argument("Simulator::setShape(...) : point " + std::to_string(i) + " is not finite");
+  spring_dist2_sweep_ = -1;  // (the hair moves: the next scan reads the points)
   int offset = 0;
   for (const Strip& s : hairstyle_.strips) {
     for (int c = 0; c < s.columns; ++c) {

@@ -327,6 +327,12 @@ class Simulator {
   std::vector<Body> bodies_;
   std::vector<SpringPair> springs_;
   std::vector<double> spring_inv_rest2_;  ///< per spring pair, 1 / rest^2
+  /// Per spring pair, |b - a|^2 at the state's places, written by stepLanes (its band check's values, those
+  /// of the strips that took the exact step computed again after it, the pairs with a root after the swap)
+  /// for the next computeSpringForces to read in pair order; valid when spring_dist2_sweep_ == sweep_.
+  std::vector<double> spring_dist2_;
+  std::vector<int> root_springs_;  ///< the spring pairs with a root (no band pair)
+  long spring_dist2_sweep_ = -1;
   std::vector<int> spring_a_, spring_b_;  ///< per spring pair, its points (springs_[k].a, .b)
   std::size_t spring_within_ = 0;         ///< springs_[0, spring_within_) are the pairs within strips
   std::vector<int> spring_outside_;       ///< computeSpringForces: the pairs outside their band
@@ -359,6 +365,7 @@ class Simulator {
   /// stepLanes' band check: a spring pair by the strip of its later point, neither a root.
   struct BandPair {
     int later = 0, earlier = 0;
+    int spring = 0;                  ///< its index in springs_
     double near2 = 0.0, far2 = 0.0;  ///< squared band edges, 1e-9 relative to spare
     bool same_strip = false;
   };
