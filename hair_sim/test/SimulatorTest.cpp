@@ -311,14 +311,15 @@ StepInputs shakeInputs(const SimConfig& config, const Iso3& rest, int i, double 
 /// between strips, minStripGap).
 std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude, long* exact_strips = nullptr,
                           double* max_penetration = nullptr, int threads = 1, int generated_strips = 0,
-                          std::vector<double>* measures = nullptr) {
+                          std::vector<double>* measures = nullptr, const Hairstyle* style = nullptr) {
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
   Iso3 head_rest = Iso3::Identity();
   head_rest.translation() = Vec3(0.0, 0.0, 1.6);
   GeneratorOptions generated;
   generated.strips = generated_strips;
-  Simulator sim(generated_strips > 0 ? generateHairstyle(config, head_rest, generated)
-                                     : loadHairstyle(config.hairstyle_file),
+  Simulator sim(style                  ? *style
+                : generated_strips > 0 ? generateHairstyle(config, head_rest, generated)
+                                       : loadHairstyle(config.hairstyle_file),
                 config.physics, config.bodies);
   sim.setStepPath(path);
   sim.setThreads(threads);
@@ -375,21 +376,12 @@ TEST(SimulatorTest, LanePathGivesTheSameBitsForOtherStripShapes) {
     options.rows = rows;
     options.seed = static_cast<std::uint32_t>(columns * 10 + rows);
     Hairstyle part = generateHairstyle(config, head_rest, options);
-    for (std::size_t i = 0; i < part.strips.size(); ++i) part.strips[i].name += "_" + std::to_string(rows);
+    for (Strip& strip : part.strips) strip.name += "_" + std::to_string(columns) + "x" + std::to_string(rows);
     if (style.strips.empty()) style.scalp = part.scalp;
     style.strips.insert(style.strips.end(), part.strips.begin(), part.strips.end());
   }
   auto run = [&](Simulator::StepPath path, long* exact) {
-    Simulator sim(style, config.physics, config.bodies);
-    sim.setStepPath(path);
-    HeadMotionEstimator head;
-    head.reset(head_rest);
-    *exact = 0;
-    for (int i = 1; i <= 40; ++i) {
-      sim.step(shakeInputs(config, head_rest, i, 1.0 / 3.0, head, sim.parameters().substep));
-      *exact += sim.exactStripCount();
-    }
-    return sim.positionsHead();
+    return runPath(path, 40, 1.0 / 3.0, exact, nullptr, 1, 0, nullptr, &style);
   };
   long exact_lanes = 0, exact_baseline = 0, exact_exact = 0;
   const std::vector<Vec3> lanes = run(Simulator::StepPath::Lanes, &exact_lanes);

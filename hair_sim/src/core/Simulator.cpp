@@ -321,14 +321,18 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       const int local = point - base;
       return (local % s.columns) * s.rows + local / s.columns;
     };
+    // A band pair's |a - b|^2 in the lanes' buffers, kept for the next substep's spring scan as well. (An
+    // earlier strip's final place is there: its lanes' result, or its exact step's, copied there below.)
+    auto bandDist2 = [&](const BandPair& bp) {
+      const double dist2 = (new_position_[static_cast<std::size_t>(bp.later)] -
+                            new_position_[static_cast<std::size_t>(bp.earlier)])
+                               .squaredNorm();
+      spring_dist2_[static_cast<std::size_t>(bp.spring)] = dist2;
+      return dist2;
+    };
     for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {
       const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
-      // (An earlier strip's final place is in the lanes' buffers: its lanes' result, or its exact step's,
-      // copied there below.)
-      const Vec3& a = new_position_[static_cast<std::size_t>(bp.later)];
-      const Vec3& b = new_position_[static_cast<std::size_t>(bp.earlier)];
-      const double dist2 = (a - b).squaredNorm();
-      spring_dist2_[static_cast<std::size_t>(bp.spring)] = dist2;
+      const double dist2 = bandDist2(bp);
       if (dist2 < bp.near2 || dist2 > bp.far2)  // kept by the later point of the pair in the sweep
         from = std::min(
             from, bp.same_strip ? std::max(sweepKey(bp.later), sweepKey(bp.earlier)) : sweepKey(bp.later));
@@ -352,13 +356,8 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       } else {
         for (int i : exact_placed_) copyBack(static_cast<std::size_t>(i));
       }
-      for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {  // its pairs' final lengths
-        const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
-        spring_dist2_[static_cast<std::size_t>(bp.spring)] =
-            (new_position_[static_cast<std::size_t>(bp.later)] -
-             new_position_[static_cast<std::size_t>(bp.earlier)])
-                .squaredNorm();
-      }
+      for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q)  // its pairs' final lengths
+        bandDist2(band_pairs_[static_cast<std::size_t>(q)]);
       continue;
     }
     // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
