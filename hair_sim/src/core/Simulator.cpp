@@ -317,10 +317,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     const Strip& s = hairstyle_.strips[si];
     int from = strip_exact_from_[si];
     const int base = strip_offset_[si];
-    auto sweepKey = [&](int point) {  // place of a point of strip si in the sweep
-      const int local = point - base;
-      return (local % s.columns) * s.rows + local / s.columns;
-    };
     // A band pair's |a - b|^2 in the lanes' buffers, kept for the next substep's spring scan as well. (An
     // earlier strip's final place is there: its lanes' result, or its exact step's, copied there below.)
     auto bandDist2 = [&](const BandPair& bp) {
@@ -333,9 +329,10 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {
       const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
       const double dist2 = bandDist2(bp);
-      if (dist2 < bp.near2 || dist2 > bp.far2)  // kept by the later point of the pair in the sweep
-        from = std::min(
-            from, bp.same_strip ? std::max(sweepKey(bp.later), sweepKey(bp.earlier)) : sweepKey(bp.later));
+      // Kept by the later point of the pair in the sweep; without a branch (the pairs outside come at
+      // random).
+      const bool outside = (dist2 < bp.near2) | (dist2 > bp.far2);
+      from = std::min(from, outside ? bp.key : kNoExact);
     }
     if (from != kNoExact) {
       stepStrip(in, f, si, strip_offset_[si], tally, from, true);
@@ -716,8 +713,14 @@ void Simulator::buildBandPairs() {
     bp.near2 = (lo * p.rest) * (lo * p.rest) * (1.0 + 1e-9);
     bp.far2 = p.within_strip ? (hi * p.rest) * (hi * p.rest) * (1.0 - 1e-9)
                              : std::numeric_limits<double>::infinity();
-    bp.same_strip = strip_of_point_[static_cast<std::size_t>(bp.later)] ==
-                    strip_of_point_[static_cast<std::size_t>(bp.earlier)];
+    const std::size_t t = static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)]);
+    const Strip& s = hairstyle_.strips[t];
+    auto sweepKey = [&](int point) {  // place of a point of strip t in its sweep
+      const int local = point - strip_offset_[t];
+      return (local % s.columns) * s.rows + local / s.columns;
+    };
+    const bool same_strip = strip_of_point_[static_cast<std::size_t>(bp.earlier)] == static_cast<int>(t);
+    bp.key = same_strip ? std::max(sweepKey(bp.later), sweepKey(bp.earlier)) : sweepKey(bp.later);
     pairs.push_back(bp);
     ++band_pair_start_[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)]) + 1];
   }

@@ -365,9 +365,11 @@ class Simulator {
   /// stepLanes' band check: a spring pair by the strip of its later point, neither a root.
   struct BandPair {
     int later = 0, earlier = 0;
-    int spring = 0;                  ///< its index in springs_
+    int spring = 0;  ///< its index in springs_
+    /// The place in the later point's strip's sweep (column * rows + row) where the pair is kept: the later
+    /// point's, or for a pair within one strip the later of its two points' places.
+    int key = 0;
     double near2 = 0.0, far2 = 0.0;  ///< squared band edges, 1e-9 relative to spare
-    bool same_strip = false;
   };
   std::vector<BandPair> band_pairs_;
   std::vector<int> band_pair_start_;  ///< per strip, CSR into band_pairs_
