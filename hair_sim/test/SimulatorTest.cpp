@@ -402,7 +402,8 @@ TEST(SimulatorTest, HelperThreadsGiveTheSameBits) {
   // substep) and scan parts of the spring pairs (each into its own extremes and list); the calling thread
   // commits the strips in order and adds the forces in pair order: any thread count gives the same hair and
   // the same spring measures. 600 strips (300 blocks of 4 chains, over 4,096 pairs): over the 128 blocks
-  // and the pairs from which the helpers take part.
+  // and the pairs from which the helpers take part, and over the 64 blocks of a run that one thread computes
+  // between the strips' commits (Simulator::kBlocksPerRun).
   long exact1 = 0, exact2 = 0, exact3 = 0;
   const int steps = 120, strips = 600;
   std::vector<double> measures1, measures2, measures3;

@@ -266,15 +266,23 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   };
   // The exact step takes over at the first flagged place of the strip in its sweep order (column by
   // column, root to tip): the places before it are the lanes'. Blocks are read in order, each once all its
-  // lanes are computed.
+  // lanes are computed (by the helpers, or here in runs of kBlocksPerRun).
   // Helpers only for hairstyles of kMinBlocksForHelpers blocks or more: below, waking them costs more than
   // they save (BM_Step2Threads/100: 0.5-1.1 x).
   LaneWorkers* workers = blocks >= kMinBlocksForHelpers ? workers_.get() : nullptr;
-  std::size_t read_blocks = 0;
+  std::size_t read_blocks = 0, run_blocks = 0;
   auto readBlocksThrough = [&](std::size_t last) {
     for (; read_blocks <= last && read_blocks < blocks; ++read_blocks) {
       const std::size_t blk = read_blocks;
-      if (workers) workers->waitFor(blk);
+      if (workers) {
+        workers->waitFor(blk);
+      } else if (blk >= run_blocks) {
+        // The blocks in runs of kBlocksPerRun, each just before its strips are read: the kernel's code stays
+        // warm through a run, and the run's results are still in the cache for the band check and the exact
+        // step.
+        const std::size_t end = std::min(blocks, blk + kBlocksPerRun);
+        for (; run_blocks < end; ++run_blocks) runBlock(run_blocks);
+      }
       const int* strips = &lane_strip_[blk * W];
       for (int l = 0; l < W; ++l) {
         if (strips[l] < 0) continue;
@@ -298,12 +306,9 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       if (workers) workers->finish();
     }
   } finish_helpers{workers};
-  if (workers) {
+  if (workers)
     workers->start(
         blocks, [](void* run, std::size_t blk) { (*static_cast<decltype(runBlock)*>(run))(blk); }, &runBlock);
-  } else {
-    for (std::size_t blk = 0; blk < blocks; ++blk) runBlock(blk);
-  }
 
   // In strip order, as the exact step goes: a strip is committed from the lanes when the spring band holds
   // at its new places (what resolveCollisions and the sweep's band check would act on) for its pairs within
