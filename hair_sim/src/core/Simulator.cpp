@@ -727,7 +727,7 @@ void Simulator::buildBandPairs() {
     const bool same_strip = strip_of_point_[static_cast<std::size_t>(bp.earlier)] == static_cast<int>(t);
     bp.key = same_strip ? std::max(sweepKey(bp.later), sweepKey(bp.earlier)) : sweepKey(bp.later);
     pairs.push_back(bp);
-    ++band_pair_start_[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)]) + 1];
+    ++band_pair_start_[t + 1];
   }
   for (std::size_t t = 0; t < hairstyle_.strips.size(); ++t) band_pair_start_[t + 1] += band_pair_start_[t];
   band_pairs_.resize(pairs.size());
