@@ -563,6 +563,44 @@ TEST(SimulatorTest, FreeStripsNeverNeedTheExactStep) {
   EXPECT_LT(worst, 1e-9);
 }
 
+TEST(SimulatorTest, TheBendLimitActsAlikeOnEveryPath) {
+  // A bend limit of 0.2 rad and a strong side wind, no body, no spring: the free steps bend over the limit,
+  // the lanes flag those points (kPointBend) and the exact step limits the lanes' own free directions, as the
+  // Exact path limits its own. The two follow each other within rounding after a second, and the limit
+  // acted: with the default limit the strip ends centimetres away.
+  PhysicsParameters p;
+  p.springs_within_strips = false;
+  p.springs_between_strips = false;
+  auto run = [&](Simulator::StepPath path, double max_bend, long* exact) {
+    PhysicsParameters q = p;
+    q.max_bend = max_bend;
+    Simulator sim(test::hangingStrip(2, 6, 0.05, 0.3), q);
+    sim.setStepPath(path);
+    StepInputs in;
+    in.wind = Vec3(0.0, 12.0, 0.0);
+    *exact = 0;
+    for (int i = 0; i < 240; ++i) {
+      sim.step(in);
+      *exact += sim.exactStripCount();
+    }
+    for (const Vec3& x : sim.positionsHead()) EXPECT_TRUE(x.allFinite());
+    return sim.positionsHead();
+  };
+  long exact_lanes = 0, exact_exact = 0, exact_free = 0;
+  const std::vector<Vec3> lanes = run(Simulator::StepPath::Lanes, 0.2, &exact_lanes);
+  const std::vector<Vec3> exact = run(Simulator::StepPath::Exact, 0.2, &exact_exact);
+  const std::vector<Vec3> free = run(Simulator::StepPath::Lanes, p.max_bend, &exact_free);
+  EXPECT_GT(exact_lanes, 0);  // the bend flags sent the strip to the exact step
+  EXPECT_EQ(exact_free, 0);   // nothing else does
+  double worst = 0.0, apart = 0.0;
+  for (std::size_t i = 0; i < lanes.size(); ++i) {
+    worst = std::max(worst, (lanes[i] - exact[i]).norm());
+    apart = std::max(apart, (lanes[i] - free[i]).norm());
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_GT(apart, 0.01);
+}
+
 TEST(SimulatorTest, LanePathTakesTurbulenceAndMixedMargins) {
   // Turbulence is evaluated lane by lane at the segment midpoints (world points), and a block of chains
   // whose strips differ in thickness margin (so see differently inflated bodies) goes to the exact step

@@ -1595,6 +1595,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
     start_pos_.resize(count);
     start_dir_.resize(count);
     start_mid_.resize(count);
+    free_dir_.resize(count);
   }
   // The within-strip band (stripOutsideBand), checked as the sweep places the later point of each pair.
   const bool check_band = params_.springs_within_strips;
@@ -1637,31 +1638,63 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
     previous_mid_[i] = mid_next;
   };
   for (int c = 0; c < s.columns; ++c) {
-    // Q: the rotation of row q_row's segment from its styled frame (the rest frame of row q_row + 1), brought
-    // down the column only where the exact step needs it.
+    // The free step (the dynamics before the bend limit and the constraints) of each row is taken from its
+    // parent's free step: the forces act at the segment hung from the parent's free end (free_pivot), and the
+    // hinge's rest direction is carried by the parents' free directions (free_dir_). The constraints then
+    // place the ends root to tip from the parents' final ends (pivot). Q: the rotation of row q_row's free
+    // direction from its styled frame (the rest frame of row q_row + 1), brought down the column only where
+    // the exact step needs it.
     Mat3 Q = Mat3::Identity();
     int q_row = 1;
     std::size_t parent = static_cast<std::size_t>(offset + s.index(0, c));
-    // Whether a point above in this column left the lanes' result (the rows below then see another pivot).
+    Vec3 free_pivot = positions_[parent];
+    // Whether a point above in this column was placed elsewhere than the lanes' free end (the rows below then
+    // hang from another pivot: their free steps hold, their constraints are resolved again), and whether one
+    // took the exact step's own dynamics (the rows below then take them too: the free steps differ by its
+    // rounding).
     bool diverged = false;
+    bool own_dynamics = false;
+    // Row r's rest direction, carried by the free directions above it (point i).
+    auto restOf = [&](int r, std::size_t i) -> Vec3 {
+      if (r == 1) return rest_dir_[i];
+      for (; q_row < r; ++q_row) {
+        const std::size_t above = static_cast<std::size_t>(s.index(q_row, c));
+        Q = minimalRotation(Q * styled_dir_[offset + above], free_dir_[above]) * Q;
+      }
+      return Q * rest_dir_[i];
+    };
+    // The bend limit relative to the rest direction keeps the hinge away from a fold-back (the angle is only
+    // needed when the cosine says it may be over the limit).
+    auto limitBend = [&](const Vec3& rest, const Vec3& next) -> Vec3 {
+      if (rest.dot(next) >= cos_max_bend) return next;
+      const Vec3 bend = rotationVectorBetween(rest, next);
+      const double bend_angle = bend.norm();
+      if (bend_angle > params_.max_bend) return rotateByVector(bend * (params_.max_bend / bend_angle), rest);
+      return next;
+    };
     for (int r = 1; r < s.rows; ++r) {
       const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
       const std::size_t local = i - static_cast<std::size_t>(offset);
       const bool before_from = c * s.rows + r < from;
-      if (before_from || (from_lanes && !diverged && !(lane_flag_[i] & lanes::kPointFull))) {
+      if (before_from || (from_lanes && !own_dynamics && !(lane_flag_[i] & lanes::kPointFull))) {
         // The lanes' free step is this point's. Before the place the exact step takes over, it is taken as it
-        // is (nothing acted there). After it, a body in the way (kPointBodies) or a spring band that the
-        // places already final would have projected the end into is resolved from it, as the exact step
-        // would after its own free step; the start state is kept for relaxStrip.
+        // is (nothing acted there). After it, a body in the way (kPointBodies), a spring band that the places
+        // already final would have projected the end into, or a pivot moved above is resolved from it, as the
+        // exact step would after its own free step; the start state is kept for relaxStrip.
         start_pos_[local] = positions_[i];
         start_dir_[local] = direction_[i];
         start_mid_[local] = previous_mid_[i];
         const Vec3& free_next = new_direction_[i];
+        free_dir_[local] = free_next;
+        free_pivot = new_position_[i];
         const Vec3& pivot = positions_[parent];
         const double d = length_[i];
+        const Vec3 limited =
+            (lane_flag_[i] & lanes::kPointBend) ? limitBend(restOf(r, i), free_next) : free_next;
         // (The end as resolveCollisions' band projection computes it, not new_position_: the same bits only
         // while neither file contracts to FMA.)
-        if (before_from || (!(lane_flag_[i] & lanes::kPointBodies) && !bandActs(i, pivot + d * free_next))) {
+        if (before_from || (!diverged && limited == free_next && !(lane_flag_[i] & lanes::kPointBodies) &&
+                            !bandActs(i, pivot + d * free_next))) {
           tally.max_rate2 = std::max(tally.max_rate2, commitLanes(i));
           if (!before_from) checkBand(i);
           parent = i;
@@ -1669,12 +1702,13 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
         }
         prepareBodies(pivot, d, positions_[i], bodies_now, bodies_before);
         const Vec3 next =
-            resolveCollisions(static_cast<int>(i), pivot, d, free_next, bodies_now, bodies_before);
+            resolveCollisions(static_cast<int>(i), pivot, d, limited, bodies_now, bodies_before);
         countPenetration(pivot + d * next, bodies_now, tally);
-        if (next == free_next) {
+        if (!diverged && next == free_next) {
           tally.max_rate2 = std::max(tally.max_rate2, commitLanes(i));
         } else {
-          place(i, pivot, d, next, rotationVectorBetween(direction_[i], next));
+          place(i, pivot, d, next,
+                next == free_next ? new_rate_[i] : rotationVectorBetween(direction_[i], next));
           diverged = true;
         }
         checkBand(i);
@@ -1682,15 +1716,12 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
         continue;
       }
       diverged = true;  // the exact step's own rounding from here down the column
-      for (; q_row < r; ++q_row) {
-        const std::size_t above = static_cast<std::size_t>(offset + s.index(q_row, c));
-        Q = minimalRotation(Q * styled_dir_[above], direction_[above]) * Q;
-      }
+      own_dynamics = true;
       const double d = length_[i];
       const double inv_i = inv_inertia_[i];
       const Vec3& pivot = positions_[parent];
       const Vec3 n = direction_[i];
-      const Vec3 mid = pivot + 0.5 * d * n;
+      const Vec3 mid = free_pivot + 0.5 * d * n;
       const Vec3& v = velocity_[i];  // midpoint velocity relative to the head over the last substep
       start_pos_[local] = positions_[i];
       start_dir_[local] = n;
@@ -1703,8 +1734,8 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       Vec3 F = rho * d * (g + a) + d * drag * (air - v) + spring_force_[i];
       // (8)-(10): reaction constraint while the control point is inside an inflated body (only a
       // body within the segment's reach can hold it).
-      const Vec3 end_now = pivot + d * n;
-      prepareBodies(pivot, d, positions_[i], bodies_now, bodies_before);
+      const Vec3 end_now = free_pivot + d * n;
+      prepareBodies(free_pivot, d, positions_[i], bodies_now, bodies_before);
       for (std::size_t b : near_) {
         const Ellipsoid& e = bodies_now[b];
         if ((q_pivot_[b] + d * (e.Sinv() * n)).squaredNorm() >= 1.0) continue;
@@ -1715,7 +1746,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       // (4)-(5): moment of F at the lever d/2 about the two axes perpendicular to the segment.
       Vec3 M = 0.5 * d * n.cross(F);
       // (3): hinge spring toward the rest direction carried by the parent.
-      const Vec3 rest = (r == 1) ? rest_dir_[i] : Vec3(Q * rest_dir_[i]);
+      const Vec3 rest = restOf(r, i);
       M -= k * rotationVectorBetween(rest, n);
       M -= M.dot(n) * n;
       // (7) corrected: I (w^{n+1} - w^n) + gamma dt w^n = dt^2 M; a swing, so without a component
@@ -1726,15 +1757,12 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       if (step_angle > params_.max_angle_step) w *= params_.max_angle_step / step_angle;
       Vec3 next = rotateByVector(w, n).normalized();
       const Vec3 free_next = next;
-      // Bend limit relative to the rest direction keeps the hinge away from a fold-back (the angle
-      // is only needed when the cosine says it may be over the limit).
-      if (rest.dot(next) < cos_max_bend) {
-        const Vec3 bend = rotationVectorBetween(rest, next);
-        const double bend_angle = bend.norm();
-        if (bend_angle > params_.max_bend)
-          next = rotateByVector(bend * (params_.max_bend / bend_angle), rest);
-      }
+      free_dir_[local] = free_next;
+      const bool pivot_moved = pivot != free_pivot;
+      free_pivot = free_pivot + d * free_next;
+      next = limitBend(rest, next);
       if (!bodies_now.empty() || partner_start_[i + 1] > partner_start_[i]) {
+        if (pivot_moved) prepareBodies(pivot, d, positions_[i], bodies_now, bodies_before);
         next = resolveCollisions(static_cast<int>(i), pivot, d, next, bodies_now, bodies_before);
         countPenetration(pivot + d * next, bodies_now, tally);
       }

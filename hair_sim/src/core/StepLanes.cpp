@@ -354,13 +354,14 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     // c).
     const V bend = restx * kx + resty * ky + restz * kz;
     const V nex = px + d * kx, ney = py + d * ky, nez = pz + d * kz;
-    M bad = bend < cos_max_bend;
+    const M bent = (bend < cos_max_bend) & active;  // (kPointBend)
+    M bad = M{} & 0;                                // a degenerate rest frame below
     if (r + 1 < job.rows) {
       const V ax = q0 * sx + q1 * sy + q2 * sz;
       const V ay = q3 * sx + q4 * sy + q5 * sz;
       const V az = q6 * sx + q7 * sy + q8 * sz;
       const V cq = ax * kx + ay * ky + az * kz;
-      bad = bad | (cq < -1.0 + 1e-9);
+      bad = cq < -1.0 + 1e-9;
       const V vx1 = ay * kz - az * ky, vy1 = az * kx - ax * kz, vz1 = ax * ky - ay * kx;
       const V den = sel(1.0 + cq > 1e-300, 1.0 + cq, splat<V>(1.0));
       const V hx1 = vx1 / den, hy1 = vy1 / den, hz1 = vz1 / den;
@@ -435,12 +436,12 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       full = full | (acting & inside_now);
       hit = hit | (acting & (end_in | cuts | swept));
     }
-    flag = flag | full | hit;
+    flag = flag | full | hit | bent;
 
     // The state at the end of the substep; the new ends are the next row's pivots.
     const V midx = px + hd * kx, midy = py + hd * ky, midz = pz + hd * kz;
     const V velx = (midx - mx) / dt, vely = (midy - my) / dt, velz = (midz - mz) / dt;
-    const M code = (full & kPointFull) | (hit & ~full & kPointBodies);
+    const M code = (full & kPointFull) | (bent & ~full & kPointBend) | (hit & ~full & kPointBodies);
     storeVec3<N>(job.out_direction, pt, pairs, kx, ky, kz);
     storeVec3<N>(job.out_rate, pt, pairs, Wx, Wy, Wz);
     storeVec3<N>(job.out_position, pt, pairs, nex, ney, nez);

@@ -20,8 +20,11 @@ namespace lanes {
 constexpr int kLanes = 4;
 
 /// BlockJob::out_flag: the point's own step must be taken again by the exact step (a reaction constraint in
-/// force, a bend over the limit, a degenerate rest frame).
+/// force, a degenerate rest frame).
 constexpr unsigned char kPointFull = 2;
+/// BlockJob::out_flag: the free step's direction may bend further than the limit from the rest direction: the
+/// exact step limits it (the free step itself holds).
+constexpr unsigned char kPointBend = 4;
 /// BlockJob::out_flag: the point's new segment or its end's path is not clear of a body within reach: the
 /// exact step resolves the collision from the lanes' free step.
 constexpr unsigned char kPointBodies = 1;

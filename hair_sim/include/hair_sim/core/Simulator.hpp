@@ -197,10 +197,13 @@ class Simulator {
   };
   /// The exact step of one strip (offset: its first point): the sweep over its columns, resolveCollisions
   /// for every segment, relaxStrip when its band does not hold. The places of the sweep before `from`
-  /// (column * rows + row) take the lanes' results (new_*_), the others the exact step. With from_lanes
-  /// (the lanes ran for the strip), a place after `from` whose column kept the lanes' results above it
-  /// starts from the lanes' free step unless its lane_flag_ says kPointFull: committed as it is when no body
-  /// is in the way and no spring band would move it, else resolveCollisions from it. Lists the points it
+  /// (column * rows + row) take the lanes' results (new_*_), the others the exact step. Every free step is
+  /// taken from the parent's free step (its free end, its free direction carrying the rest direction), the
+  /// constraints from the parent's final end. With from_lanes (the lanes ran for the strip), a place after
+  /// `from` starts from the lanes' free step unless its lane_flag_ says kPointFull or a place above in its
+  /// column took the exact step's own dynamics: the bend limit applied when the lanes flagged it
+  /// (kPointBend), then committed as it is when no pivot above moved, no body is in the way and no spring
+  /// band would move it, else resolveCollisions from it. Lists the points it
   /// places itself in exact_placed_ and sets exact_relaxed_ when relaxStrip ran (stepLanes copies those
   /// back).
   void stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset, StepTally& tally,
@@ -358,6 +361,9 @@ class Simulator {
   std::vector<int> tighten_to_;
   // The current strip at the start of the substep (positions, directions, segment midpoints).
   std::vector<Vec3> start_pos_, start_dir_, start_mid_;
+  /// stepStrip: the free directions of the strip's points (before the bend limit and the constraints), which
+  /// carry the hinges' rest directions down the columns.
+  std::vector<Vec3> free_dir_;
   std::vector<int> partner_start_;  ///< CSR: partners of point k are [start[k], start[k+1])
   std::vector<int> partner_index_;
   std::vector<int> partner_strip_;  ///< strip_of_point_ of partner_index_
