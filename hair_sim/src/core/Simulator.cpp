@@ -1678,9 +1678,10 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       const bool before_from = c * s.rows + r < from;
       if (before_from || (from_lanes && !own_dynamics && !(lane_flag_[i] & lanes::kPointFull))) {
         // The lanes' free step is this point's. Before the place the exact step takes over, it is taken as it
-        // is (nothing acted there). After it, a body in the way (kPointBodies), a spring band that the places
-        // already final would have projected the end into, or a pivot moved above is resolved from it, as the
-        // exact step would after its own free step; the start state is kept for relaxStrip.
+        // is (nothing acted there). After it, the bend limit applies where the lanes flagged it (kPointBend);
+        // then a body in the way (kPointBodies), a spring band that the places already final would have
+        // projected the end into, a pivot moved above or the bend limit is resolved from it, as the exact
+        // step would after its own free step; the start state is kept for relaxStrip.
         start_pos_[local] = positions_[i];
         start_dir_[local] = direction_[i];
         start_mid_[local] = previous_mid_[i];

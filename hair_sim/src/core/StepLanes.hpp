@@ -56,7 +56,8 @@ struct BlockJob {
   Vec3* out_rate = nullptr;
   Vec3* out_velocity = nullptr;
   Vec3* out_mid = nullptr;
-  /// Per point, what the exact step must do there (kPointFull, kPointBodies or 0: nothing).
+  /// Per point, what the exact step must do there: kPointFull alone, else kPointBend and kPointBodies, either
+  /// or both (5), or 0: nothing.
   unsigned char* out_flag = nullptr;
   /// Bodies for the block's thickness margin.
   const LaneBody* bodies = nullptr;
