@@ -1291,19 +1291,11 @@ int Simulator::rowBandSide(std::size_t strip, int row) const {
 }
 
 double Simulator::bandTarget(double dist, double signed_rest) const {
-  // A pair outside its band is moved kBandSkin of the edge's distance inside it, not onto the edge: pairs in
-  // contact (strips lying on each other, pressed together every substep) are then not projected again in
-  // every substep, and most of their strips stay in the lanes (at 10,000 strips 16 % of the strips take the
-  // exact step against 29 % with the edge itself). The skin is 0.12 mm for pairs 1 cm apart at rest. The
-  // points' mean speeds in the second half of the shipped scenarios changed by -0.2 % to +2.0 % (skins of
-  // 0.5 % and 1 % gave -3.8 % to +3.5 %, with no trend in the skin's size; docs/benchmarks.md, stop 32).
-  constexpr double kBandSkin = 0.02;
   const double rest = std::abs(signed_rest);
-  if (dist < params_.spring_proximity_factor * rest)
-    return params_.spring_proximity_factor * rest * (1.0 + kBandSkin);
+  if (dist < params_.spring_proximity_factor * rest) return params_.spring_proximity_factor * rest * 1.000001;
   // A strip's width stays within the band; between strips only the spring force attracts.
   if (signed_rest > 0.0 && dist > params_.spring_far_factor * rest)
-    return params_.spring_far_factor * rest * (1.0 - kBandSkin);
+    return params_.spring_far_factor * rest * 0.999999;
   return 0.0;
 }
 
