@@ -309,6 +309,37 @@ StepInputs shakeInputs(const SimConfig& config, const Iso3& rest, int i, double 
 
 /// measures: the spring measures after the last substep (minSpringRatio and maxSpringRatio within and
 /// between strips, minStripGap).
+/// The largest distance between the points of a and b (the same size).
+double maxDistance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+  return worst;
+}
+
+/// The default parameters without springs.
+PhysicsParameters withoutSprings() {
+  PhysicsParameters p;
+  p.springs_within_strips = false;
+  p.springs_between_strips = false;
+  return p;
+}
+
+/// `style` without bodies on `path` for `substeps` substeps of a steady wind, the head still: the final
+/// positions; *exact counts the strips that took the exact step.
+std::vector<Vec3> runInWind(const Hairstyle& style, const PhysicsParameters& p, Simulator::StepPath path,
+                            const Vec3& wind, int substeps, long* exact) {
+  Simulator sim(style, p);
+  sim.setStepPath(path);
+  StepInputs in;
+  in.wind = wind;
+  *exact = 0;
+  for (int i = 0; i < substeps; ++i) {
+    sim.step(in);
+    *exact += sim.exactStripCount();
+  }
+  return sim.positionsHead();
+}
+
 std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude, long* exact_strips = nullptr,
                           double* max_penetration = nullptr, int threads = 1, int generated_strips = 0,
                           std::vector<double>* measures = nullptr, const Hairstyle* style = nullptr) {
@@ -538,29 +569,15 @@ TEST(SimulatorTest, LanePathFollowsTheExactStep) {
 TEST(SimulatorTest, FreeStripsNeverNeedTheExactStep) {
   // No body, no spring: nothing for the exact step to do, every strip is committed from the lanes, and the
   // result is the exact step's within rounding after a second of swinging.
-  PhysicsParameters p;
-  p.springs_within_strips = false;
-  p.springs_between_strips = false;
-  auto run = [&](Simulator::StepPath path, int* exact) {
-    Simulator sim(test::hangingStrip(3, 6, 0.05, 0.7), p);
-    sim.setStepPath(path);
-    StepInputs in;
-    in.wind = Vec3(0.0, 3.0, 0.0);
-    *exact = 0;
-    for (int i = 0; i < 240; ++i) {
-      sim.step(in);
-      *exact += sim.exactStripCount();
-    }
-    return sim.positionsHead();
-  };
-  int exact_lanes = -1, exact_exact = -1;
-  const std::vector<Vec3> a = run(Simulator::StepPath::Lanes, &exact_lanes);
-  const std::vector<Vec3> b = run(Simulator::StepPath::Exact, &exact_exact);
+  const PhysicsParameters p = withoutSprings();
+  const Hairstyle style = test::hangingStrip(3, 6, 0.05, 0.7);
+  const Vec3 wind(0.0, 3.0, 0.0);
+  long exact_lanes = -1, exact_exact = -1;
+  const std::vector<Vec3> a = runInWind(style, p, Simulator::StepPath::Lanes, wind, 240, &exact_lanes);
+  const std::vector<Vec3> b = runInWind(style, p, Simulator::StepPath::Exact, wind, 240, &exact_exact);
   EXPECT_EQ(exact_lanes, 0);
   EXPECT_EQ(exact_exact, 240);
-  double worst = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
-  EXPECT_LT(worst, 1e-9);
+  EXPECT_LT(maxDistance(a, b), 1e-9);
 }
 
 TEST(SimulatorTest, TheBendLimitActsAlikeOnEveryPath) {
@@ -568,37 +585,22 @@ TEST(SimulatorTest, TheBendLimitActsAlikeOnEveryPath) {
   // the lanes flag those points (kPointBend) and the exact step limits the lanes' own free directions, as the
   // Exact path limits its own. The two follow each other within rounding after a second, and the limit
   // acted: with the default limit the strip ends centimetres away.
-  PhysicsParameters p;
-  p.springs_within_strips = false;
-  p.springs_between_strips = false;
-  auto run = [&](Simulator::StepPath path, double max_bend, long* exact) {
-    PhysicsParameters q = p;
-    q.max_bend = max_bend;
-    Simulator sim(test::hangingStrip(2, 6, 0.05, 0.3), q);
-    sim.setStepPath(path);
-    StepInputs in;
-    in.wind = Vec3(0.0, 12.0, 0.0);
-    *exact = 0;
-    for (int i = 0; i < 240; ++i) {
-      sim.step(in);
-      *exact += sim.exactStripCount();
-    }
-    for (const Vec3& x : sim.positionsHead()) EXPECT_TRUE(x.allFinite());
-    return sim.positionsHead();
-  };
+  const PhysicsParameters p = withoutSprings();
+  const Hairstyle style = test::hangingStrip(2, 6, 0.05, 0.3);
+  const Vec3 wind(0.0, 12.0, 0.0);
+  PhysicsParameters limited = p;
+  limited.max_bend = 0.2;
   long exact_lanes = 0, exact_exact = 0, exact_free = 0;
-  const std::vector<Vec3> lanes = run(Simulator::StepPath::Lanes, 0.2, &exact_lanes);
-  const std::vector<Vec3> exact = run(Simulator::StepPath::Exact, 0.2, &exact_exact);
-  const std::vector<Vec3> free = run(Simulator::StepPath::Lanes, p.max_bend, &exact_free);
+  const std::vector<Vec3> lanes =
+      runInWind(style, limited, Simulator::StepPath::Lanes, wind, 240, &exact_lanes);
+  const std::vector<Vec3> exact =
+      runInWind(style, limited, Simulator::StepPath::Exact, wind, 240, &exact_exact);
+  const std::vector<Vec3> free = runInWind(style, p, Simulator::StepPath::Lanes, wind, 240, &exact_free);
+  for (const Vec3& x : lanes) EXPECT_TRUE(x.allFinite());
   EXPECT_GT(exact_lanes, 0);  // the bend flags sent the strip to the exact step
   EXPECT_EQ(exact_free, 0);   // nothing else does
-  double worst = 0.0, apart = 0.0;
-  for (std::size_t i = 0; i < lanes.size(); ++i) {
-    worst = std::max(worst, (lanes[i] - exact[i]).norm());
-    apart = std::max(apart, (lanes[i] - free[i]).norm());
-  }
-  EXPECT_LT(worst, 1e-9);
-  EXPECT_GT(apart, 0.01);
+  EXPECT_LT(maxDistance(lanes, exact), 1e-9);
+  EXPECT_GT(maxDistance(lanes, free), 0.01);
 }
 
 TEST(SimulatorTest, LanePathTakesTurbulenceAndMixedMargins) {
