@@ -247,8 +247,9 @@ TEST(RobustnessTest, OfflineRunnerCountsTeleportsAndKeepsTheHairSane) {
     *largest_move = 0.0;
     const RunSummary summary = runner.run(
         [&](const OutputFrame& frame) {
+          const Iso3 world_to_head = frame.head_pose.inverse();
           std::vector<Vec3> local;
-          for (const Vec3& p : *frame.points_world) local.push_back(frame.head_pose.inverse() * p);
+          for (const Vec3& p : *frame.points_world) local.push_back(world_to_head * p);
           for (std::size_t i = 0; i < before.size(); ++i)
             *largest_move = std::max(*largest_move, (local[i] - before[i]).norm());
           before = local;

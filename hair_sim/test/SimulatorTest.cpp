@@ -155,6 +155,13 @@ Simulator defaultSimulator(bool compensate = true) {
   return Simulator(loadHairstyle(config.hairstyle_file), config.physics);
 }
 
+/// The largest distance between the points of a and b (the same size).
+double maxDistance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+  return worst;
+}
+
 double maxDeviationAfterRest(Simulator& sim, double seconds) {
   StepInputs in;
   in.head.pose.translation() = Vec3(0.0, 0.0, 1.6);
@@ -162,10 +169,7 @@ double maxDeviationAfterRest(Simulator& sim, double seconds) {
   for (int i = 0; i < steps; ++i) sim.step(in);
   std::vector<Vec3> styled;
   for (const Strip& s : sim.hairstyle().strips) styled.insert(styled.end(), s.points.begin(), s.points.end());
-  double worst = 0.0;
-  for (std::size_t i = 0; i < styled.size(); ++i)
-    worst = std::max(worst, (sim.positionsHead()[i] - styled[i]).norm());
-  return worst;
+  return maxDistance(sim.positionsHead(), styled);
 }
 
 TEST(SimulatorTest, StyledDefaultHairstyleIsTheEquilibriumAtRest) {
@@ -307,15 +311,6 @@ StepInputs shakeInputs(const SimConfig& config, const Iso3& rest, int i, double 
   return in;
 }
 
-/// measures: the spring measures after the last substep (minSpringRatio and maxSpringRatio within and
-/// between strips, minStripGap).
-/// The largest distance between the points of a and b (the same size).
-double maxDistance(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  double worst = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
-  return worst;
-}
-
 /// The default parameters without springs.
 PhysicsParameters withoutSprings() {
   PhysicsParameters p;
@@ -340,6 +335,8 @@ std::vector<Vec3> runInWind(const Hairstyle& style, const PhysicsParameters& p, 
   return sim.positionsHead();
 }
 
+/// measures: the spring measures after the last substep (minSpringRatio and maxSpringRatio within and
+/// between strips, minStripGap).
 std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude, long* exact_strips = nullptr,
                           double* max_penetration = nullptr, int threads = 1, int generated_strips = 0,
                           std::vector<double>* measures = nullptr, const Hairstyle* style = nullptr) {
@@ -423,9 +420,7 @@ TEST(SimulatorTest, LanePathGivesTheSameBitsForOtherStripShapes) {
   EXPECT_EQ(exact_lanes, exact_baseline);
   EXPECT_GT(exact_lanes, 0);            // some strips took the exact step,
   EXPECT_LT(exact_lanes, exact_exact);  // most were committed from the lanes
-  double worst = 0.0;
-  for (std::size_t i = 0; i < lanes.size(); ++i) worst = std::max(worst, (lanes[i] - exact[i]).norm());
-  EXPECT_LT(worst, 1e-8);
+  EXPECT_LT(maxDistance(lanes, exact), 1e-8);
 }
 
 TEST(SimulatorTest, HelperThreadsGiveTheSameBits) {
@@ -555,9 +550,7 @@ TEST(SimulatorTest, LanePathFollowsTheExactStep) {
   const std::vector<Vec3> lanes = runPath(Simulator::StepPath::Lanes, 40, 1.0 / 3.0);
   const std::vector<Vec3> exact = runPath(Simulator::StepPath::Exact, 40, 1.0 / 3.0);
   ASSERT_EQ(lanes.size(), exact.size());
-  double worst = 0.0;
-  for (std::size_t i = 0; i < lanes.size(); ++i) worst = std::max(worst, (lanes[i] - exact[i]).norm());
-  EXPECT_LT(worst, 1e-8);
+  EXPECT_LT(maxDistance(lanes, exact), 1e-8);
   // Under violent input neither path leaves a control point inside a body.
   double pen_lanes = 1.0, pen_exact = 1.0;
   runPath(Simulator::StepPath::Lanes, 240, 1.0, nullptr, &pen_lanes);
