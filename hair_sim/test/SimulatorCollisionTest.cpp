@@ -155,23 +155,29 @@ TEST(SimulatorCollisionTest, ViolentHeadShakeWithWindOntoHeadAndShouldersNeverPe
   EXPECT_LE(summary.max_width_ratio, config.physics.spring_far_factor + 1e-9);
 }
 
+/// Four parallel columns 1 cm apart (test::hangingStrip, 5 rows of 5 cm) split into strip A (y = -0.015,
+/// -0.005) and strip B (0.005, 0.015).
+Hairstyle twoStrips() {
+  const Hairstyle four = test::hangingStrip(4, 5, 0.05, 0.0, 0.01);
+  Hairstyle two = four;
+  two.strips.assign(2, four.strips[0]);
+  for (int s = 0; s < 2; ++s) {
+    Strip& st = two.strips[static_cast<std::size_t>(s)];
+    st.columns = 2;
+    st.points.clear();
+    for (int r = 0; r < 5; ++r)
+      for (int c = 0; c < 2; ++c) st.points.push_back(four.strips[0].point(r, 2 * s + c));
+  }
+  return two;
+}
+
 TEST(SimulatorCollisionTest, StripsPushedTogetherKeepProximityTimesRestLength) {
   // Two strips side by side; a wall keeps strip A in place while the wind pushes strip B onto it.
   PhysicsParameters p = quiet();
   p.springs_between_strips = true;
   p.springs_within_strips = true;
   p.spring_radius = 0.02;
-  // Four parallel columns 1 cm apart split into strip A (y = -0.015, -0.005) and B (0.005, 0.015).
-  const Hairstyle four = test::hangingStrip(4, 5, 0.05, 0.0, 0.01);
-  Hairstyle a = four;
-  a.strips.assign(2, four.strips[0]);
-  for (int s = 0; s < 2; ++s) {
-    Strip& st = a.strips[static_cast<std::size_t>(s)];
-    st.columns = 2;
-    st.points.clear();
-    for (int r = 0; r < 5; ++r)
-      for (int c = 0; c < 2; ++c) st.points.push_back(four.strips[0].point(r, 2 * s + c));
-  }
+  const Hairstyle a = twoStrips();
   const Body wall =
       worldBody("wall", Vec3(0.0, -0.5, -0.05), Vec3(0.5, 0.479, 0.8));  // nearly flat at y = -0.021
   Simulator sim(a, p, {wall});
@@ -204,17 +210,79 @@ TEST(SimulatorCollisionTest, StripsPushedTogetherKeepProximityTimesRestLength) {
 }
 
 TEST(SimulatorCollisionTest, SpringForceFollowsEquation11OutsideTheBandOnly) {
+  // No gravity, hinge, wind or body: from rest, a segment's only moment is that of the spring force (11) at
+  // its end, F = k_s x along the pair with x the stretch beyond far_factor x rest, applied at the lever d/2
+  // ((4)-(5)); one substep of (7) from rest turns it by dt^2 |M| / I with I = rho d^3 / 3 (a rod about its
+  // end). Stretched within the band, nothing moves at all.
   PhysicsParameters p = quiet();
   p.gravity.setZero();
-  p.springs_within_strips = true;
+  p.springs_between_strips = true;
   p.spring_stiffness = 2.0;
-  Simulator sim(test::hangingStrip(2, 4, 0.05, 0.0, 0.02), p);
-  ASSERT_EQ(sim.springs().size(), 3u);  // rows 1..3, one pair each
-  // Inside the band nothing happens: a still strip at rest stays exactly at rest.
-  StepInputs in;
-  sim.step(in);
-  for (std::size_t k = 0; k < sim.positionsHead().size(); ++k)
-    EXPECT_EQ(sim.positionsHead()[k], (test::hangingStrip(2, 4, 0.05, 0.0, 0.02).strips[0].points[k]));
+  p.spring_radius = 0.012;
+  p.spring_max_pairs = 1;
+  const double d = 0.05, rest = 0.01, dt = p.substep;
+  const double inertia = p.linear_density * d * d * d / 3.0;
+  for (Simulator::StepPath path :
+       {Simulator::StepPath::Lanes, Simulator::StepPath::LanesBaseline, Simulator::StepPath::Exact}) {
+    SCOPED_TRACE(static_cast<int>(path));
+    Simulator sim(twoStrips(), p);
+    sim.setStepPath(path);
+    // Strip 0's points 2 r + 1 (its inner column) and strip 1's 10 + 2 r (its inner column), rows 1..4 (the
+    // roots never move: no pair of two roots).
+    ASSERT_EQ(sim.springs().size(), 4u);
+    for (const SpringPair& s : sim.springs()) {
+      EXPECT_FALSE(s.within_strip);
+      EXPECT_EQ(s.b - s.a, 9);  // the same row of the two inner columns
+      EXPECT_NEAR(s.rest, rest, 1e-15);
+    }
+    for (int k = 0; k < sim.controlPointCount(); ++k)
+      if (k % 10 != 0 && k % 10 != 1) EXPECT_NEAR(sim.inertia(k), inertia, 1e-12 * inertia) << k;
+
+    // Strip 1 swung out about x (its roots fixed): the pair of row r is then 1 cm + r d sin(a) apart in y.
+    auto swung = [&](double a) {
+      std::vector<Vec3> x = sim.positionsHead();
+      for (int k = 10; k < 20; ++k) {
+        const int row = (k - 10) / 2;
+        const Vec3 root = x[static_cast<std::size_t>(k - 2 * row)];
+        x[static_cast<std::size_t>(k)] = root + row * d * Vec3(0.0, std::sin(a), -std::cos(a));
+      }
+      return x;
+    };
+    // Within the band (rows 1-4 at 1.1-1.4 x rest: sin(a) = 0.1 rest / d): not a bit moves.
+    sim.setShape(swung(std::asin(0.1 * rest / d)));
+    const std::vector<Vec3> inside = sim.positionsHead();
+    ASSERT_GT((inside[18] - inside[9]).norm(), 1.39 * rest);  // row 4's pair
+    sim.step(StepInputs{});
+    for (std::size_t k = 0; k < inside.size(); ++k) EXPECT_EQ(sim.positionsHead()[k], inside[k]) << k;
+
+    // Beyond the band (rows 1-4 at 1.6-3.4 x rest): each inner segment turns by dt^2 |M| / I.
+    sim.setShape(swung(std::asin(0.6 * rest / d)));
+    const std::vector<Vec3> before = sim.positionsHead();
+    std::vector<Vec3> force(before.size(), Vec3::Zero());
+    int stretched = 0;
+    for (const SpringPair& s : sim.springs()) {
+      const Vec3 delta = before[static_cast<std::size_t>(s.b)] - before[static_cast<std::size_t>(s.a)];
+      const double x = delta.norm() - p.spring_far_factor * rest;
+      if (x <= 0.0) continue;
+      ++stretched;
+      const Vec3 f = p.spring_stiffness * x * delta.normalized();  // pulls a toward b
+      force[static_cast<std::size_t>(s.a)] += f;
+      force[static_cast<std::size_t>(s.b)] -= f;
+    }
+    ASSERT_EQ(stretched, 4);
+    sim.step(StepInputs{});
+    const std::vector<Vec3>& after = sim.positionsHead();
+    for (int k = 0; k < sim.controlPointCount(); ++k) {
+      if (k % 10 < 2) continue;  // roots
+      const std::size_t i = static_cast<std::size_t>(k), parent = i - 2;
+      const Vec3 n = (before[i] - before[parent]).normalized();
+      const Vec3 n_after = (after[i] - after[parent]).normalized();
+      const double turned = std::atan2(n.cross(n_after).norm(), n.dot(n_after));
+      const double expected = dt * dt * (0.5 * d * n.cross(force[i])).norm() / inertia;
+      EXPECT_NEAR(turned, expected, 1e-9 * expected + 1e-12) << "point " << k;
+      if (k % 2 == (k < 10 ? 1 : 0)) EXPECT_GT(expected, 1e-3) << k;  // the inner columns really turn
+    }
+  }
 }
 
 TEST(SimulatorCollisionTest, SpringPairsBetweenStripsScaleLinearly) {
