@@ -866,14 +866,48 @@ TEST(SimulatorTest, SpringRatiosAndGapAreThoseOfTheStateTheSubstepBegan) {
 }
 
 TEST(SimulatorTest, InertiaFloorOnlyBitesForUnstableCombinations) {
-  const double dt = 1.0 / 240.0;
-  // The tests above use physical inertia: the floor is far below it.
-  EXPECT_LT(Simulator::inertiaFloor(1e-4, 8.3e-7, dt), 0.01 * 0.05 * 0.05 * 0.05 / 3.0 * 0.1);
-  // A stiff hinge on a tiny segment: omega dt would exceed 2 (explicit blow-up) without the floor.
-  const double I = 0.01 * std::pow(0.002, 3) / 3.0;
-  const double floor = Simulator::inertiaFloor(4e-4, 1e-5, dt);
-  EXPECT_GT(floor, I);
-  EXPECT_LE(4e-4 * dt * dt / floor, 0.5 + 1e-12);
+  // The explicit step (7) of a hinge of stiffness k_eff on a segment of inertia I is stable for
+  // k_eff dt^2 / I < 1 (omega dt < 2 in the undamped limit); the floor keeps it at or below 0.5. k_eff is the
+  // hinge plus the linear springs that can act at the lever d/2: the collision constraint and, with the
+  // default parameters, two within-strip and spring_max_pairs between-strip springs.
+  const PhysicsParameters p;  // the defaults
+  const double dt = p.substep;
+  auto stiffness = [&](double d) {
+    return p.hinge_stiffness +
+           (p.collision_stiffness + (2 + p.spring_max_pairs) * p.spring_stiffness) * 0.25 * d * d;
+  };
+  // Segments of 5 cm (the hairstyles' scale): the rod's own inertia about its end, rho d^3 / 3.
+  {
+    const double d = 0.05, rod = p.linear_density * d * d * d / 3.0;
+    const Simulator sim(test::hangingStrip(2, 5, d, 0.3), p);
+    for (int k = 2; k < sim.controlPointCount(); ++k) EXPECT_NEAR(sim.inertia(k), rod, 1e-12 * rod) << k;
+    EXPECT_LT(stiffness(d) * dt * dt / rod, 0.5);
+  }
+  // Segments of 2 mm: the rod's inertia would make k_eff dt^2 / I = 265 (omega dt = 16); the floor raises it.
+  const double d = 0.002, rod = p.linear_density * d * d * d / 3.0;
+  ASSERT_GT(stiffness(d) * dt * dt / rod, 10.0);
+  PhysicsParameters still = p;
+  still.gravity.setZero();  // the styled shape is then the equilibrium
+  Simulator sim(test::hangingStrip(2, 5, d, 0.3), still);
+  for (int k = 2; k < sim.controlPointCount(); ++k) {
+    EXPECT_GT(sim.inertia(k), 100.0 * rod) << k;
+    EXPECT_LE(stiffness(d) * dt * dt / sim.inertia(k), 0.5 + 1e-12) << k;
+  }
+  // And the step stays stable: bent 0.5 rad away from its styled shape, the hair swings back and settles.
+  std::vector<Vec3> styled = sim.hairstyle().strips[0].points;
+  std::vector<Vec3> bent = styled;
+  for (std::size_t k = 2; k < bent.size(); ++k) {
+    const int row = static_cast<int>(k / 2);
+    bent[k] = bent[k % 2] + row * d * Vec3(0.0, std::sin(0.8), -std::cos(0.8));
+  }
+  sim.setShape(bent);
+  const double start = maxDistance(sim.positionsHead(), styled);
+  ASSERT_GT(start, 1e-3);
+  for (int i = 0; i < 480; ++i) {
+    sim.step(StepInputs{});
+    ASSERT_LE(maxDistance(sim.positionsHead(), styled), 1.5 * start) << "substep " << i;
+  }
+  EXPECT_LT(maxDistance(sim.positionsHead(), styled), 0.01 * start);
 }
 
 }  // namespace
