@@ -577,8 +577,10 @@ TEST(SimulatorTest, TheBendLimitActsAlikeOnEveryPath) {
   // A bend limit of 0.2 rad and a strong side wind, no body, no spring: the free steps bend over the limit,
   // the lanes flag those points (kPointBend) and the exact step limits the lanes' own free directions, as the
   // Exact path limits its own. The two follow each other within rounding after a second, and the limit
-  // acted: with the default limit the strip ends centimetres away.
-  const PhysicsParameters p = withoutSprings();
+  // acted: with the default limit the strip ends centimetres away, and the root segments (whose rest
+  // direction is their styled one, without rest compensation) lie at the limit, not beyond it.
+  PhysicsParameters p = withoutSprings();
+  p.compensate_rest_angles = false;
   const Hairstyle style = test::hangingStrip(2, 6, 0.05, 0.3);
   const Vec3 wind(0.0, 12.0, 0.0);
   PhysicsParameters limited = p;
@@ -594,6 +596,19 @@ TEST(SimulatorTest, TheBendLimitActsAlikeOnEveryPath) {
   EXPECT_EQ(exact_free, 0);   // nothing else does
   EXPECT_LT(maxDistance(lanes, exact), 1e-9);
   EXPECT_GT(maxDistance(lanes, free), 0.01);
+  const std::vector<Vec3>& styled = style.strips[0].points;
+  for (const std::vector<Vec3>* run : {&lanes, &exact, &free})
+    for (std::size_t c = 0; c < 2; ++c) {
+      const Vec3 rest = (styled[c + 2] - styled[c]).normalized();
+      const Vec3 now = ((*run)[c + 2] - (*run)[c]).normalized();
+      const double bend = std::atan2(rest.cross(now).norm(), rest.dot(now));
+      if (run == &free) {
+        EXPECT_GT(bend, 0.3) << "column " << c;  // what the wind does without the limit
+      } else {
+        EXPECT_LE(bend, limited.max_bend + 1e-9) << "column " << c;
+        EXPECT_GT(bend, limited.max_bend - 0.01) << "column " << c;
+      }
+    }
 }
 
 TEST(SimulatorTest, LanePathTakesTurbulenceAndMixedMargins) {
