@@ -179,11 +179,11 @@ TEST(HairLookTest, StripesMakeAlphaVaryAcrossTheStrip) {
 }
 
 TEST(HairLookTest, StripePatternIsDeterministicAndDiffersBetweenStrips) {
-  const HairLook look;
+  const HairLook look, another;
   double difference = 0.0;
   for (int i = 0; i <= 100; ++i) {
     const double u = i / 100.0;
-    EXPECT_EQ(look.stripeProfile(u, 7u), look.stripeProfile(u, 7u));
+    EXPECT_EQ(look.stripeProfile(u, 7u), another.stripeProfile(u, 7u));
     difference += std::abs(look.stripeProfile(u, 7u) - look.stripeProfile(u, 8u));
     EXPECT_GE(look.stripeProfile(u, 7u), 0.0);
     EXPECT_LE(look.stripeProfile(u, 7u), 1.0);

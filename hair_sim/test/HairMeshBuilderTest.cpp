@@ -75,9 +75,15 @@ TEST(HairMeshBuilderTest, TriangleBudgetChoosesTheLevel) {
     points.insert(points.end(), s.points.begin(), s.points.end());
   }
   builder.build(points, offsets, style.scalp);
-  EXPECT_LE(builder.triangleCount(), 5000);
+  // 100 strips of 2 x 5: 8 samples_across samples_along triangles each, so the ladder's levels (1, 1), (1,
+  // 2), (1, 3), (2, 4) give 800, 1600, 2400, 6400: the finest within 5000 is (1, 3).
+  ASSERT_EQ(style.strips.size(), 100u);
+  EXPECT_EQ(builder.triangleCount(), 2400);
   options.max_triangles = 10;  // below the coarsest level: a clear error
-  EXPECT_NE(test::errorOf([&] { HairMeshBuilder b(style, options); }).find("10"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] {
+              HairMeshBuilder b(style, options);
+            }).find("max_triangles 10 is below the minimum level's 800 triangles"),
+            std::string::npos);
 }
 
 TEST(HairMeshBuilderTest, ViolentShakeLeavesNoMeshVertexInsideABody) {

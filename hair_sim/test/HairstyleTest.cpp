@@ -50,7 +50,7 @@ TEST(HairstyleTest, EveryMalformedKeyIsNamedWithItsValue) {
       {"width: 0.02", "width: .inf", "strips[0].width", ".inf"},
       {"thickness_margin: 0.004", "thickness_margin: 5", "strips[0].thickness_margin", "5"},
       {"color: [0.3, 0.2, 0.1, 1.0]", "color: [0.3, 2.0, 0.1]", "strips[0].color[1]", "2"},
-      {"radii: [0.1, 0.1, 0.1]", "radii: [0.1, 0, 0.1]", "scalp.radii", "0"},
+      {"radii: [0.1, 0.1, 0.1]", "radii: [0.1, 0, 0.1]", "scalp.radii", "got 0"},
       {"radii: [0.1, 0.1, 0.1]", "radii: [0.1, 0.1]", "scalp.radii", "[0.1, 0.1]"},
       {"[0, 0.01, 0.25]]", "[0, 0.01]]", "strips[0].points[7]", "[0, 0.01]"},
       {"[0, 0.01, 0.25]]", "[0, 0.01, nan]]", "strips[0].points[7][2]", "nan"},
@@ -90,7 +90,7 @@ TEST(HairstyleTest, ConfigErrorsNameKeyAndValue) {
   const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::vector<test::FileEdit> cases = {
       {"hinge_stiffness: 4.0e-4", "hinge_stiffness: -1", "physics.hinge_stiffness", "-1"},
-      {"substep: 0.004166666666666667", "substep: 0", "physics.substep", "0"},
+      {"substep: 0.004166666666666667", "substep: 0", "physics.substep", "value '0'"},
       {"publish_rate: 30.0", "publish_rate: fast", "publish_rate", "fast"},
       {"world_frame: world", "world_frame: ''", "world_frame", "valid tf frame"},
       {"air_drag: 0.02", "air_drag: 0.02\n  air_dragg: 1", "physics.air_dragg", "unknown key"},

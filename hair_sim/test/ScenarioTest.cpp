@@ -51,7 +51,7 @@ TEST(ScenarioTest, MalformedKeysAreNamed) {
   const std::vector<test::FileEdit> cases = {
       {"duration: 2.0", "duration: -2", "duration", "-2"},
       {"output_rate: 30", "output_rate: x", "output_rate", "'x'"},
-      {"t: 1.0", "t: 0.0", "head[1].t", "0"},
+      {"t: 1.0", "t: 0.0", "head[1].t", ": 0 s is not"},
       {"rpy: [0, 0, 0.5]", "rpy: [0, 0]", "head[1].rpy", "[0, 0]"},
       {"position: [0, 0, 1.6], rpy: [0, 0, 0]}", "position: [0, 0, .nan], rpy: [0, 0, 0]}",
        "head[0].position[2]", ".nan"},
