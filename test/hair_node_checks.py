@@ -13,9 +13,10 @@ translate_distance m over translate_duration s, and stops. The checks, run in th
                                 by the strips' thickness margin), bodies in a tf frame placed by tf at the
                                 state's stamp (the node samples tf at the same stamps). The roots (row 0),
                                 on the scalp by construction, get 1e-4 (see ROOT_TOLERANCE).
-  test_c_reset_rest_pose        The reset service (REST_POSE) succeeds, and the states published after it
-                                have every tip within 1 mm of its rest position in head coordinates (the
-                                styled shape of the hairstyle file, which is the rest shape).
+  test_c_reset_rest_pose        The reset service (REST_POSE) succeeds, the substep count (HairState.step)
+                                starts again, and the states published after it have every tip within 1 mm
+                                of its rest position in head coordinates (the styled shape of the hairstyle
+                                file, which is the rest shape).
   test_d_markers_well_formed    Every hair_markers message received during the whole run: at least one
                                 TRIANGLE_LIST marker, frame_id == world frame, every point (and pose, scale,
                                 colour) finite, and len(colors) == len(points) > 0 for list markers.
@@ -431,6 +432,11 @@ class HairNodeChecks(unittest.TestCase):
     def test_c_reset_rest_pose(self):
         rospy.wait_for_service('reset', timeout=10.0)
         reset = rospy.ServiceProxy('reset', Reset)
+        # The hair has settled near its rest shape by now, so the shape alone would not show a reset that did
+        # nothing: the substep count (HairState.step, since the last reset) must start again as well.
+        self.wait_for(lambda: bool(self.states) and self.states[-1].step > 240, 10.0, 'a second of substeps')
+        with self.lock:
+            steps_before = self.states[-1].step
         response = reset(ResetRequest(mode=ResetRequest.REST_POSE))
         after = rospy.Time.now()
         self.assertTrue(response.success, 'reset REST_POSE failed: %s' % response.message)
@@ -443,11 +449,13 @@ class HairNodeChecks(unittest.TestCase):
         def five_states_after():
             for stamp, head, msg in self.process_new_states():
                 if msg.header.stamp > after:
-                    checked.append((stamp, self.tips_local(head, msg)))
+                    checked.append((stamp, self.tips_local(head, msg), msg.step))
             return len(checked) >= 5
 
         self.wait_for(five_states_after, 10.0, 'hair_state after the reset')
-        for stamp, tips in checked:
+        self.assertLess(checked[0][2], steps_before, 'the substep count did not start again at the reset '
+                        '(%d before it, %d after)' % (steps_before, checked[0][2]))
+        for stamp, tips, _ in checked:
             self.assertEqual(len(tips), len(rest))
             worst = max((math.sqrt(sum((a - b) ** 2 for a, b in zip(t, r))), k) for k, (t, r) in
                         enumerate(zip(tips, rest)))
