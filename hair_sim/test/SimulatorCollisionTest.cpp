@@ -1,13 +1,17 @@
 /// Body ellipsoids (8)-(10), the no-tunnelling guarantee and the springs (11) inside the Simulator.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <set>
+#include <utility>
 
 #include "TestUtil.hpp"
 #include "hair_sim/core/Simulator.hpp"
 #include "hair_sim/core/dynamics/HeadState.hpp"
+#include "hair_sim/core/model/HairstyleGenerator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
 #include "hair_sim/tools/OfflineRunner.hpp"
@@ -285,14 +289,60 @@ TEST(SimulatorCollisionTest, SpringForceFollowsEquation11OutsideTheBandOnly) {
   }
 }
 
-TEST(SimulatorCollisionTest, SpringPairsBetweenStripsScaleLinearly) {
-  // The grid pairs each point with at most spring_max_pairs partners: the count per strip is bounded.
+/// The pairs between strips by brute force: for every control point that is not a root, its spring_max_pairs
+/// nearest points of other strips (not roots) closer than spring_radius at rest (and farther than 1 um),
+/// nearer first and the lower index first at equal distances; each pair once (smaller index first).
+std::set<std::pair<int, int>> nearestPairsByBruteForce(const Hairstyle& style, const PhysicsParameters& p) {
+  std::vector<Vec3> x;
+  std::vector<int> strip_of;
+  std::vector<bool> root;
+  for (std::size_t s = 0; s < style.strips.size(); ++s)
+    for (int k = 0; k < style.strips[s].pointCount(); ++k) {
+      x.push_back(style.strips[s].points[static_cast<std::size_t>(k)]);
+      strip_of.push_back(static_cast<int>(s));
+      root.push_back(k < style.strips[s].columns);
+    }
+  std::set<std::pair<int, int>> pairs;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (root[i]) continue;
+    std::vector<std::pair<double, int>> near;
+    for (std::size_t j = 0; j < x.size(); ++j) {
+      if (root[j] || strip_of[j] == strip_of[i]) continue;
+      const double dist = (x[j] - x[i]).norm();
+      if (dist < p.spring_radius && dist > 1e-6) near.push_back({dist, static_cast<int>(j)});
+    }
+    std::sort(near.begin(), near.end());
+    for (std::size_t n = 0; n < std::min(near.size(), static_cast<std::size_t>(p.spring_max_pairs)); ++n)
+      pairs.insert(
+          {std::min(static_cast<int>(i), near[n].second), std::max(static_cast<int>(i), near[n].second)});
+  }
+  return pairs;
+}
+
+TEST(SimulatorCollisionTest, SpringPairsBetweenStripsAreTheNearestWithinTheRadius) {
+  // The Simulator finds the pairs through a grid in time linear in the number of strips; the pairs are those
+  // of the brute-force search over every two points, for the default hairstyle and a denser generated one.
   const SimConfig config = defaultConfig();
-  Simulator sim(loadHairstyle(config.hairstyle_file), config.physics, config.bodies);
-  int between = 0;
-  for (const SpringPair& s : sim.springs()) between += s.within_strip ? 0 : 1;
-  EXPECT_GT(between, 100);
-  EXPECT_LE(between, sim.controlPointCount() * config.physics.spring_max_pairs);
+  GeneratorOptions options;
+  options.strips = 300;
+  options.rings = 8;
+  Iso3 rest = Iso3::Identity();
+  rest.translation() = Vec3(0.0, 0.0, 1.6);
+  for (const Hairstyle& style :
+       {loadHairstyle(config.hairstyle_file), generateHairstyle(config, rest, options)}) {
+    const Simulator sim(style, config.physics, config.bodies);
+    std::set<std::pair<int, int>> found;
+    for (const SpringPair& s : sim.springs()) {
+      if (s.within_strip) continue;
+      EXPECT_TRUE(found.insert({std::min(s.a, s.b), std::max(s.a, s.b)}).second) << s.a << " " << s.b;
+      // The rest length is the pair's distance in the styled shape (the state at construction).
+      const std::vector<Vec3>& x = sim.positionsHead();
+      EXPECT_EQ(s.rest, (x[static_cast<std::size_t>(s.b)] - x[static_cast<std::size_t>(s.a)]).norm());
+    }
+    const std::set<std::pair<int, int>> expected = nearestPairsByBruteForce(style, config.physics);
+    EXPECT_GT(expected.size(), style.strips.size());  // many pairs: the comparison means something
+    EXPECT_EQ(found, expected);
+  }
 }
 
 TEST(SimulatorCollisionTest, ResetGivesTheBitsOfAFreshSimulator) {
