@@ -9,10 +9,11 @@ translate_distance m over translate_duration s, and stops. The checks, run in th
                                 every tip is back within 5 mm of its position before the move (3 states in
                                 a row) within a settle time derived from the config (see settle_time()).
   test_b_no_point_inside_a_body No control point of any HairState received so far lies inside a body of the
-                                config: |S^-1 (p - c)| >= 1 - 1e-6 with the body's own radii (not inflated
-                                by the strips' thickness margin), bodies in a tf frame placed by tf at the
-                                state's stamp (the node samples tf at the same stamps). The roots (row 0),
-                                on the scalp by construction, get 1e-4 (see ROOT_TOLERANCE).
+                                config inflated by the strip's thickness margin (the core's hard
+                                guarantee): |S^-1 (p - c)| >= 1 - 1e-5, bodies in a tf frame placed by tf at
+                                the state's stamp (the node samples tf at the same stamps). The roots (row
+                                0), on the scalp by construction, against the bodies' own radii with 1e-4
+                                (see ROOT_TOLERANCE).
   test_c_reset_rest_pose        The reset service (REST_POSE) succeeds, the substep count (HairState.step)
                                 starts again, and the states published after it have every tip within 1 mm
                                 of its rest position in head coordinates (the styled shape of the hairstyle
@@ -48,7 +49,6 @@ import rosgraph
 import rospy
 import rostest
 import tf2_ros
-import yaml
 from hair_sim_msgs.msg import HairState
 from hair_sim_msgs.srv import Reset, ResetRequest
 from rosgraph_msgs.msg import Log
@@ -77,19 +77,9 @@ ROOT_TOLERANCE = 1e-4
 # ---------------------------------------------------------------------------------------------- geometry
 # Shared geometry (this folder is not on sys.path when catkin's relay runs the script).
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from hair_test_geometry import Body, Pose, strip_points, wait_until  # noqa: E402
+from hair_test_geometry import Body, Pose, closest_to_bodies, load_config, strip_points, wait_until  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------- config
-def load_config(path):
-    with open(path) as f:
-        config = yaml.safe_load(f)
-    hairstyle_path = os.path.join(os.path.dirname(os.path.abspath(path)),
-                                  config.get('hairstyle', 'hairstyles/default.yaml'))
-    with open(hairstyle_path) as f:
-        hairstyle = yaml.safe_load(f)
-    return config, hairstyle
-
-
 def segment_lengths(hairstyle):
     lengths = []
     for strip in hairstyle['strips']:
@@ -397,33 +387,20 @@ class HairNodeChecks(unittest.TestCase):
     def test_b_no_point_inside_a_body(self):
         self.process_new_states()
         self.assertTrue(self.processed, 'no hair_state received')
-        worst = (float('inf'), None)
-        worst_root = (float('inf'), None)
-        for stamp, head, msg in self.processed:
-            maps = []
-            for body in self.bodies:
-                frame = self.head_frame if body.frame == self.config.get('head_frame', 'head') else body.frame
-                pose = head if frame == self.head_frame else self.lookup(frame, msg.header.stamp)
-                maps.append((body.name, body.sphere_map(pose)))
-            for s, strip in enumerate(msg.strips):
-                for k, p in enumerate(strip_points(strip)):
-                    root = k < strip.columns
-                    for name, (m, o) in maps:
-                        qx = m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z - o[0]
-                        qy = m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z - o[1]
-                        qz = m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z - o[2]
-                        q = math.sqrt(qx * qx + qy * qy + qz * qz)
-                        if root:
-                            if q < worst_root[0]:
-                                worst_root = (q, (stamp, s, 0, k, name))
-                        elif q < worst[0]:
-                            worst = (q, (stamp, s, k // strip.columns, k % strip.columns, name))
-        rospy.loginfo('%s: %d states checked; smallest |S^-1 (p - c)| = %.9f below the roots (t, strip, row, '
-                      'column, body = %s), %.9f at the roots (%s)', NAME, len(self.processed), worst[0], worst[1],
-                      worst_root[0], worst_root[1])
+        head_frame_in_config = self.config.get('head_frame', 'head')
+
+        def body_pose(body, head, stamp):
+            return head if body.frame in (head_frame_in_config, self.head_frame) else self.lookup(body.frame, stamp)
+
+        margins = [float(strip['thickness_margin']) for strip in self.hairstyle['strips']]
+        worst, worst_root = closest_to_bodies(self.processed, self.bodies, margins, body_pose)
+        rospy.loginfo('%s: %d states checked; smallest |S^-1 (p - c)| = %.9f below the roots against the bodies '
+                      'inflated by the thickness margin (t, strip, row, column, body = %s), %.9f at the roots '
+                      'against the bodies (%s)', NAME, len(self.processed), worst[0], worst[1], worst_root[0],
+                      worst_root[1])
         self.assertGreaterEqual(worst[0], 1.0 - INSIDE_TOLERANCE,
-                                'control point inside a body: |S^-1 (p - c)| = %.9f at (t, strip, row, column, '
-                                'body) = %s' % (worst[0], worst[1]))
+                                'control point inside an inflated body: |S^-1 (p - c)| = %.9f at (t, strip, row, '
+                                'column, body) = %s' % (worst[0], worst[1]))
         self.assertGreaterEqual(worst_root[0], 1.0 - ROOT_TOLERANCE,
                                 'root inside a body: |S^-1 (p - c)| = %.9f at (t, strip, row, column, body) = %s'
                                 % (worst_root[0], worst_root[1]))

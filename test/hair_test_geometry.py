@@ -3,7 +3,10 @@ ellipsoids of config/hair_sim.yaml (plain Python, no numpy on Debian's ROS insta
 
 import collections
 import math
+import os
 import time
+
+import yaml
 
 Point = collections.namedtuple('Point', 'x y z')
 
@@ -85,12 +88,52 @@ class Body(object):
         self.rotation = rpy_to_matrix(*[float(v) for v in entry.get('rpy', [0.0, 0.0, 0.0])])
         self.radii = tuple(float(v) for v in entry['radii'])
 
-    def sphere_map(self, frame_pose):
-        """(M, o) with S^-1 (p - c) = M p - o for world points p, the body's frame at frame_pose."""
-        scale = ((1.0 / self.radii[0], 0.0, 0.0), (0.0, 1.0 / self.radii[1], 0.0), (0.0, 0.0, 1.0 / self.radii[2]))
+    def sphere_map(self, frame_pose, margin=0.0):
+        """(M, o) with S^-1 (p - c) = M p - o for world points p, the body's frame at frame_pose; with margin
+        (m), of the body inflated by it (every radius + margin, as the core's Ellipsoid::inflated)."""
+        r = [radius + margin for radius in self.radii]
+        scale = ((1.0 / r[0], 0.0, 0.0), (0.0, 1.0 / r[1], 0.0), (0.0, 0.0, 1.0 / r[2]))
         m = mat_mul(scale, mat_mul(transpose(self.rotation), transpose(frame_pose.r)))
         center_world = tuple(a + b for a, b in zip(mat_vec(frame_pose.r, self.center), frame_pose.t))
         return m, mat_vec(m, center_world)
+
+
+def load_config(path):
+    """The config file and the hairstyle file it names (relative to it), parsed."""
+    with open(path) as f:
+        config = yaml.safe_load(f)
+    hairstyle_path = os.path.join(os.path.dirname(os.path.abspath(path)),
+                                  config.get('hairstyle', 'hairstyles/default.yaml'))
+    with open(hairstyle_path) as f:
+        hairstyle = yaml.safe_load(f)
+    return config, hairstyle
+
+
+def closest_to_bodies(processed, bodies, margins, body_pose):
+    """Over the (stamp, head pose, HairState) entries of processed: the smallest |S^-1 (p - c)| of a control
+    point below the roots, against every body inflated by its strip's thickness margin (margins[strip], the
+    hard guarantee of the core), and of a root, against the bodies' own radii (the roots sit on the scalp);
+    each as (value, (t, strip, row, column, body)). body_pose(body, head, stamp) places a body's frame."""
+    worst = (float('inf'), None)
+    worst_root = (float('inf'), None)
+    for stamp, head, msg in processed:
+        poses = [body_pose(body, head, msg.header.stamp) for body in bodies]
+        own = [(body.name, body.sphere_map(pose)) for body, pose in zip(bodies, poses)]
+        for s, strip in enumerate(msg.strips):
+            inflated = [(body.name, body.sphere_map(pose, margins[s])) for body, pose in zip(bodies, poses)]
+            for k, p in enumerate(strip_points(strip)):
+                root = k < strip.columns
+                for name, (m, o) in own if root else inflated:
+                    qx = m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z - o[0]
+                    qy = m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z - o[1]
+                    qz = m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z - o[2]
+                    q = math.sqrt(qx * qx + qy * qy + qz * qz)
+                    if root:
+                        if q < worst_root[0]:
+                            worst_root = (q, (stamp, s, 0, k, name))
+                    elif q < worst[0]:
+                        worst = (q, (stamp, s, k // strip.columns, k % strip.columns, name))
+    return worst, worst_root
 
 
 def wait_until(predicate, timeout, what, fail, alive=lambda: True, period=0.02):
