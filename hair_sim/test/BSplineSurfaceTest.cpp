@@ -233,8 +233,11 @@ TEST(BSplineSurfaceTest, ExtendedControlPointsAreReflections) {
   const Vec3 corner =
       2 * (2 * at(grid, 3, 0, 0) - at(grid, 3, 1, 0)) - (2 * at(grid, 3, 0, 1) - at(grid, 3, 1, 1));
   EXPECT_NEAR((surface.extendedControlPoint(-1, -1) - corner).norm(), 0.0, 1e-15);
-  EXPECT_THROW(surface.extendedControlPoint(-2, 0), std::out_of_range);
-  EXPECT_THROW(surface.controlPoint(3, 0), std::out_of_range);
+  test::expectThrowNaming<std::out_of_range>(
+      [&] { surface.extendedControlPoint(-2, 0); },
+      "(column -2, row 0) outside the extended grid [-1, 3] x [-1, 5]");
+  test::expectThrowNaming<std::out_of_range>([&] { surface.controlPoint(3, 0); },
+                                             "(column 3, row 0) outside the 3 x 5 grid");
 }
 
 TEST(BSplineSurfaceTest, BadInputsThrowNamingTheValue) {

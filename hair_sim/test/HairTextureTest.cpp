@@ -111,8 +111,8 @@ TEST(HairTextureTest, BadInputsThrow) {
   expectInvalid([&] { HairTexture t(look, 1, 64); }, "width and height must be in [2, 4096], got 1 x 64");
   expectInvalid([&] { HairTexture t(look, 64, 5000); }, "got 64 x 5000");
   const HairTexture texture(look, 4, 4);
-  EXPECT_THROW(texture.texel(4, 0), std::out_of_range);
-  EXPECT_THROW(texture.texel(0, -1), std::out_of_range);
+  test::expectThrowNaming<std::out_of_range>([&] { texture.texel(4, 0); }, "texel (4, 0) is outside 4 x 4");
+  test::expectThrowNaming<std::out_of_range>([&] { texture.texel(0, -1); }, "texel (0, -1) is outside 4 x 4");
 }
 
 }  // namespace

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "TestUtil.hpp"
+
 #include "hair_sim/core/geometry/Tessellator.hpp"
 
 namespace hair_sim {
@@ -180,12 +182,17 @@ TEST(PlyWriterTest, BadPathThrowsNamingIt) {
 
 TEST(PlyWriterTest, InconsistentInputsThrow) {
   const std::string path = ::testing::TempDir() + "hair_sim_ply_writer_bad.ply";
-  EXPECT_THROW(PlyWriter::write(path, {smallMesh(0.0)}, {std::vector<Rgba>(7)}), std::invalid_argument);
-  EXPECT_THROW(PlyWriter::write(path, {smallMesh(0.0)}, {std::vector<Rgba>(8), std::vector<Rgba>(8)}),
-               std::invalid_argument);
+  // Each message says what does not fit (smallMesh has 8 vertices).
+  test::expectInvalid([&] { PlyWriter::write(path, {smallMesh(0.0)}, {std::vector<Rgba>(7)}); },
+                      "colours of mesh 0 must have 8 entries, got 7");
+  test::expectInvalid(
+      [&] {
+        PlyWriter::write(path, {smallMesh(0.0)}, {std::vector<Rgba>(8), std::vector<Rgba>(8)});
+      },
+      "one entry per mesh (1), got 2");
   StripMesh broken = smallMesh(0.0);
   broken.normals.pop_back();
-  EXPECT_THROW(PlyWriter::write(path, {broken}, {}), std::invalid_argument);
+  test::expectInvalid([&] { PlyWriter::write(path, {broken}, {}); }, "with 8 positions and 7 normals");
 }
 
 }  // namespace

@@ -89,15 +89,21 @@ void expectEditsNamed(const std::string& good, const std::vector<FileEdit>& edit
   }
 }
 
-/// Expects `statement` to throw std::invalid_argument whose message contains `text`.
-template <typename F>
-void expectInvalid(F statement, const std::string& text) {
+/// Expects `statement` to throw an E whose message contains `text`.
+template <typename E, typename F>
+void expectThrowNaming(F statement, const std::string& text) {
   try {
     statement();
     ADD_FAILURE() << "no exception, expected one mentioning '" << text << "'";
-  } catch (const std::invalid_argument& e) {
+  } catch (const E& e) {
     EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
   }
+}
+
+/// Expects `statement` to throw std::invalid_argument whose message contains `text`.
+template <typename F>
+void expectInvalid(F statement, const std::string& text) {
+  expectThrowNaming<std::invalid_argument>(statement, text);
 }
 
 }  // namespace test
