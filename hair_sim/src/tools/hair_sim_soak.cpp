@@ -18,10 +18,10 @@
 ///   next substep, while no input at the validation's limits (nor a violent head key) acts. The bodies
 ///   keep the last word: a body can hold a strip open for a substep (two columns' tips escaping a body to
 ///   either side of it, neither able to cross it to its partner), and the band brings it back in the next
-///   one; such single substeps are counted (band_single_substeps_without_extreme_input) and listed in
-///   band_episodes, and a breach that lasts two substeps in a row fails the run. Under inputs at the
-///   limits no breach fails (listed only); with --band report none does. Then the kinetic energy of the hair
-///   relative to the head <= the bound below.
+///   one; such single substeps are counted (band_single_substeps_without_extreme_input; the ten worst
+///   episodes in band_worst_episodes), and a breach that lasts two substeps in a row fails the run. Under
+///   inputs at the limits no breach fails (counted only); with --band report none does. Then the kinetic
+///   energy of the hair relative to the head <= the bound below.
 /// Every --check-every seconds: every segment's length within 1e-6 of its rest length (relative), and
 /// the resident set size (/proc/self/statm), which must not grow by more than 4 MiB after the first check
 /// (not under AddressSanitizer, whose quarantine keeps freed memory: rss_checked says which).
