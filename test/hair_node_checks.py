@@ -13,7 +13,7 @@ translate_distance m over translate_duration s, and stops. The checks, run in th
                                 guarantee): |S^-1 (p - c)| >= 1 - 1e-5, bodies in a tf frame placed by tf at
                                 the state's stamp (the node samples tf at the same stamps). The roots (row
                                 0), on the scalp by construction, against the bodies' own radii with 1e-4
-                                (see ROOT_TOLERANCE).
+                                (see ROOT_TOLERANCE in hair_test_geometry.py).
   test_c_reset_rest_pose        The reset service (REST_POSE) succeeds, the substep count (HairState.step)
                                 starts again, and the states published after it have every tip within 1 mm
                                 of its rest position in head coordinates (the styled shape of the hairstyle
@@ -67,17 +67,12 @@ SETTLE_TOLERANCE = 0.005  # m
 SETTLE_CONSECUTIVE = 3  # states in a row within the tolerance
 SETTLE_CAP = 8.0  # s
 RESET_TOLERANCE = 0.001  # m
-INSIDE_TOLERANCE = 1e-5  # on |S^-1 (p - c)|, control points below the roots (float32 in hair_state: ~1e-7 m)
-# Roots (row 0) lie on the scalp ellipsoid by construction (|S^-1 (p - c)| = 1). The test knows the head pose
-# at a state's stamp only to about 0.3 us of time (a double of seconds since 1970 resolves 0.24 us), which
-# while the head moves at 1 m/s is a few 1e-6 of |S^-1 (p - c)|: roots get a looser tolerance.
-ROOT_TOLERANCE = 1e-4
 
 
 # ---------------------------------------------------------------------------------------------- geometry
 # Shared geometry (this folder is not on sys.path when catkin's relay runs the script).
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from hair_test_geometry import Body, Pose, closest_to_bodies, load_config, strip_points, wait_until  # noqa: E402
+from hair_test_geometry import Body, Pose, assert_no_point_inside, load_config, strip_points, wait_until  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------- config
 def segment_lengths(hairstyle):
@@ -385,25 +380,7 @@ class HairNodeChecks(unittest.TestCase):
 
     # -- (b) no control point inside a body
     def test_b_no_point_inside_a_body(self):
-        self.process_new_states()
-        self.assertTrue(self.processed, 'no hair_state received')
-        head_frame_in_config = self.config.get('head_frame', 'head')
-
-        def body_pose(body, head, stamp):
-            return head if body.frame in (head_frame_in_config, self.head_frame) else self.lookup(body.frame, stamp)
-
-        margins = [float(strip['thickness_margin']) for strip in self.hairstyle['strips']]
-        worst, worst_root = closest_to_bodies(self.processed, self.bodies, margins, body_pose)
-        rospy.loginfo('%s: %d states checked; smallest |S^-1 (p - c)| = %.9f below the roots against the bodies '
-                      'inflated by the thickness margin (t, strip, row, column, body = %s), %.9f at the roots '
-                      'against the bodies (%s)', NAME, len(self.processed), worst[0], worst[1], worst_root[0],
-                      worst_root[1])
-        self.assertGreaterEqual(worst[0], 1.0 - INSIDE_TOLERANCE,
-                                'control point inside an inflated body: |S^-1 (p - c)| = %.9f at (t, strip, row, '
-                                'column, body) = %s' % (worst[0], worst[1]))
-        self.assertGreaterEqual(worst_root[0], 1.0 - ROOT_TOLERANCE,
-                                'root inside a body: |S^-1 (p - c)| = %.9f at (t, strip, row, column, body) = %s'
-                                % (worst_root[0], worst_root[1]))
+        assert_no_point_inside(self, NAME, rospy.loginfo)
 
     # -- (c) reset
     def test_c_reset_rest_pose(self):

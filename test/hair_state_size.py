@@ -22,8 +22,10 @@ import unittest
 
 import rospy
 import rostest
-import yaml
 from hair_sim_msgs.msg import HairState
+
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+from hair_test_geometry import load_config  # noqa: E402
 
 PKG = 'hair_sim'
 NAME = 'hair_state_size'
@@ -34,22 +36,13 @@ TIMEOUT = 40.0  # s, for the first messages (the node waits for the head's tf)
 COLOUR_TOLERANCE = 1e-6  # float32 in the message
 
 
-def load_hairstyle(config_path):
-    with open(config_path) as f:
-        config = yaml.safe_load(f)
-    path = os.path.join(os.path.dirname(os.path.abspath(config_path)),
-                        config.get('hairstyle', 'hairstyles/default.yaml'))
-    with open(path) as f:
-        return yaml.safe_load(f)
-
-
 class HairStateSize(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node(NAME)
 
     def setUp(self):
-        self.hairstyle = load_hairstyle(rospy.get_param('~config_file'))
+        self.hairstyle = load_config(rospy.get_param('~config_file'))[1]
         self.lock = threading.Lock()
 
     def wait_for(self, condition, timeout, what):

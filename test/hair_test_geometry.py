@@ -136,6 +136,40 @@ def closest_to_bodies(processed, bodies, margins, body_pose):
     return worst, worst_root
 
 
+# On |S^-1 (p - c)| of the control points below the roots (float32 in hair_state: ~1e-7 m).
+INSIDE_TOLERANCE = 1e-5
+# Roots (row 0) lie on the scalp ellipsoid by construction (|S^-1 (p - c)| = 1). The test knows the head pose
+# at a state's stamp only to about 0.3 us of time (a double of seconds since 1970 resolves 0.24 us), which
+# while the head moves at 1 m/s is a few 1e-6 of |S^-1 (p - c)|: roots get a looser tolerance.
+ROOT_TOLERANCE = 1e-4
+
+
+def assert_no_point_inside(test, name, log):
+    """The check of a rostest's test_b_no_point_inside_a_body: over every state `test` has processed
+    (test.processed, after test.process_new_states()), no control point below the roots inside a body of
+    test.config inflated by its strip's thickness margin (test.hairstyle), and no root inside a body itself;
+    the bodies in the head frame follow the state's head pose, the others are placed by test.lookup. Logs the
+    closest approach with log (e.g. rospy.loginfo)."""
+    test.process_new_states()
+    test.assertTrue(test.processed, 'no hair_state received')
+    head_frame_in_config = test.config.get('head_frame', 'head')
+
+    def body_pose(body, head, stamp):
+        return head if body.frame in (head_frame_in_config, test.head_frame) else test.lookup(body.frame, stamp)
+
+    margins = [float(strip['thickness_margin']) for strip in test.hairstyle['strips']]
+    worst, worst_root = closest_to_bodies(test.processed, test.bodies, margins, body_pose)
+    log('%s: %d states checked; smallest |S^-1 (p - c)| = %.9f below the roots against the bodies inflated by '
+        'the thickness margin (t, strip, row, column, body = %s), %.9f at the roots against the bodies (%s)'
+        % (name, len(test.processed), worst[0], worst[1], worst_root[0], worst_root[1]))
+    test.assertGreaterEqual(worst[0], 1.0 - INSIDE_TOLERANCE,
+                            'control point inside an inflated body: |S^-1 (p - c)| = %.9f at (t, strip, row, '
+                            'column, body) = %s' % (worst[0], worst[1]))
+    test.assertGreaterEqual(worst_root[0], 1.0 - ROOT_TOLERANCE,
+                            'root inside a body: |S^-1 (p - c)| = %.9f at (t, strip, row, column, body) = %s'
+                            % (worst_root[0], worst_root[1]))
+
+
 def wait_until(predicate, timeout, what, fail, alive=lambda: True, period=0.02):
     """Polls predicate() until it returns something true, which is returned; after timeout s (or when
     alive() turns false) calls fail('timed out ... waiting for <what>') (a TestCase's fail)."""

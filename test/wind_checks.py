@@ -16,7 +16,7 @@ steady wind, compared with the offline runner.
       hair reaches the neck, torso and shoulder bodies) lies inside a body of the config:
       |S^-1 (p - c)| >= 1 - 1e-5 against every body inflated by the strip's thickness margin (the core's
       hard guarantee), bodies placed by tf at the state's stamp; the roots (row 0), on the scalp by
-      construction, against the bodies' own radii with 1e-4 (see ROOT_TOLERANCE).
+      construction, against the bodies' own radii with 1e-4 (see ROOT_TOLERANCE in hair_test_geometry.py).
 
 Private parameters: config_file (required), offline_bin (path of hair_sim_offline; if it does not exist,
 it is looked up with roslib as hair_sim's executable hair_sim_offline), world_frame / head_frame (default:
@@ -47,17 +47,12 @@ EQUILIBRIUM_CHANGE = 0.0005  # m between consecutive window means
 MIN_DISPLACEMENT = 0.005  # m
 OFFLINE_DURATION = 15.0  # s
 OFFLINE_AVERAGE = 3.0  # s at the end of the offline run
-INSIDE_TOLERANCE = 1e-5  # on |S^-1 (p - c)|, control points below the roots (float32 in hair_state: ~1e-7 m)
-# Roots (row 0) lie on the scalp ellipsoid by construction (|S^-1 (p - c)| = 1). The test knows the head pose
-# at a state's stamp only to about 0.3 us of time (a double of seconds since 1970 resolves 0.24 us), which
-# while the head moves at 1 m/s is a few 1e-6 of |S^-1 (p - c)|: roots get a looser tolerance.
-ROOT_TOLERANCE = 1e-4
 
 
 # ---------------------------------------------------------------------------------------------- geometry
 # Shared geometry (this folder is not on sys.path when catkin's relay runs the script).
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from hair_test_geometry import Body, Pose, closest_to_bodies, load_config, strip_points, wait_until  # noqa: E402
+from hair_test_geometry import Body, Pose, assert_no_point_inside, load_config, strip_points, wait_until  # noqa: E402
 
 def mean(values):
     values = list(values)
@@ -266,25 +261,7 @@ class WindChecks(unittest.TestCase):
                              % (1e3 * node_dx, 1e3 * offline_dx, 100 * self.tolerance))
 
     def test_b_no_point_inside_a_body(self):
-        self.process_new_states()
-        self.assertTrue(self.processed, 'no hair_state received')
-        head_frame_in_config = self.config.get('head_frame', 'head')
-
-        def body_pose(body, head, stamp):
-            return head if body.frame in (head_frame_in_config, self.head_frame) else self.lookup(body.frame, stamp)
-
-        margins = [float(strip['thickness_margin']) for strip in self.hairstyle['strips']]
-        worst, worst_root = closest_to_bodies(self.processed, self.bodies, margins, body_pose)
-        rospy.loginfo('%s: %d states checked; smallest |S^-1 (p - c)| = %.9f below the roots against the bodies '
-                      'inflated by the thickness margin (t, strip, row, column, body = %s), %.9f at the roots '
-                      'against the bodies (%s)', NAME, len(self.processed), worst[0], worst[1], worst_root[0],
-                      worst_root[1])
-        self.assertGreaterEqual(worst[0], 1.0 - INSIDE_TOLERANCE,
-                                'control point inside an inflated body: |S^-1 (p - c)| = %.9f at (t, strip, row, '
-                                'column, body) = %s' % (worst[0], worst[1]))
-        self.assertGreaterEqual(worst_root[0], 1.0 - ROOT_TOLERANCE,
-                                'root inside a body: |S^-1 (p - c)| = %.9f at (t, strip, row, column, body) = %s'
-                                % (worst_root[0], worst_root[1]))
+        assert_no_point_inside(self, NAME, rospy.loginfo)
 
 
 if __name__ == '__main__':
