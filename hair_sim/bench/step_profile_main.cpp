@@ -1,7 +1,7 @@
 /// hair_sim_step_profile: BM_Step's hairstyle and motion for a fixed number of substeps, for profilers that
 /// count (callgrind, perf stat) and for checking that a change keeps the simulation's bits.
 ///
-///   hair_sim_step_profile [--strips N] [--warmup N] [--substeps N] [--path lanes|baseline|exact]
+///   hair_sim_step_profile [--strips N] [--warmup N] [--substeps N] [--path lanes|avx2|baseline|exact]
 ///                         [--threads N] [--config FILE]
 ///
 /// Runs --warmup substeps (default 480: 2 s, the hair moving and lying on the bodies), then --substeps
@@ -29,7 +29,8 @@ extern "C" __attribute__((noinline)) void step_profile_measured(Simulator& sim, 
 namespace {
 
 const char* const kUsage =
-    "usage: hair_sim_step_profile [--strips N] [--warmup N] [--substeps N] [--path lanes|baseline|exact] "
+    "usage: hair_sim_step_profile [--strips N] [--warmup N] [--substeps N] [--path "
+    "lanes|avx2|baseline|exact] "
     "[--threads N] [--config FILE]\n";
 
 [[noreturn]] void usage(const std::string& why) {
@@ -77,10 +78,12 @@ int main(int argc, char** argv) {
         path = Simulator::StepPath::Lanes;
       else if (path_name == "baseline")
         path = Simulator::StepPath::LanesBaseline;
+      else if (path_name == "avx2")
+        path = Simulator::StepPath::LanesAvx2;
       else if (path_name == "exact")
         path = Simulator::StepPath::Exact;
       else
-        usage("--path wants lanes, baseline or exact, got '" + path_name + "'");
+        usage("--path wants lanes, avx2, baseline or exact, got '" + path_name + "'");
     } else {
       usage("unknown option '" + flag + "'");
     }

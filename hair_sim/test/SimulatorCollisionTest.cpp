@@ -239,8 +239,11 @@ TEST(SimulatorCollisionTest, SpringForceFollowsEquation11OutsideTheBandOnly) {
       EXPECT_EQ(s.b - s.a, 9);  // the same row of the two inner columns
       EXPECT_NEAR(s.rest, rest, 1e-15);
     }
-    for (int k = 0; k < sim.controlPointCount(); ++k)
-      if (k % 10 != 0 && k % 10 != 1) EXPECT_NEAR(sim.inertia(k), inertia, 1e-12 * inertia) << k;
+    for (int k = 0; k < sim.controlPointCount(); ++k) {
+      if (k % 10 != 0 && k % 10 != 1) {
+        EXPECT_NEAR(sim.inertia(k), inertia, 1e-12 * inertia) << k;
+      }
+    }
 
     // Strip 1 swung out about x (its roots fixed): the pair of row r is then 1 cm + r d sin(a) apart in y.
     auto swung = [&](double a) {
@@ -284,7 +287,9 @@ TEST(SimulatorCollisionTest, SpringForceFollowsEquation11OutsideTheBandOnly) {
       const double turned = std::atan2(n.cross(n_after).norm(), n.dot(n_after));
       const double expected = dt * dt * (0.5 * d * n.cross(force[i])).norm() / inertia;
       EXPECT_NEAR(turned, expected, 1e-9 * expected + 1e-12) << "point " << k;
-      if (k % 2 == (k < 10 ? 1 : 0)) EXPECT_GT(expected, 1e-3) << k;  // the inner columns really turn
+      if (k % 2 == (k < 10 ? 1 : 0)) {
+        EXPECT_GT(expected, 1e-3) << k;  // the inner columns really turn
+      }
     }
   }
 }

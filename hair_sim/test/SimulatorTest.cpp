@@ -371,14 +371,18 @@ std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude,
 }
 
 TEST(SimulatorTest, LanePathGivesTheSameBitsWithAndWithoutAvx2) {
-  // The AVX2 and baseline kernels run the same operations in the same order without FMA. (On a CPU without
-  // AVX2 both runs take the baseline kernel and the test only checks determinism.)
+  // The AVX-512VL, AVX2 and baseline kernels run the same operations in the same order without FMA. (On a
+  // CPU without AVX-512VL the first two runs take the same kernel, and without AVX2 all three do: the test
+  // then only checks determinism.)
   long exact = 0;
   const int steps = 480;
   const std::vector<Vec3> a = runPath(Simulator::StepPath::Lanes, steps, 1.0, &exact);
   const std::vector<Vec3> b = runPath(Simulator::StepPath::LanesBaseline, steps, 1.0);
+  const std::vector<Vec3> c = runPath(Simulator::StepPath::LanesAvx2, steps, 1.0);
   ASSERT_EQ(a.size(), b.size());
+  ASSERT_EQ(a.size(), c.size());
   EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)));
+  EXPECT_EQ(0, std::memcmp(a.data(), c.data(), a.size() * sizeof(Vec3)));
   // Both halves of the path were exercised: strips committed from the lanes and strips sent to the exact
   // step.
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
@@ -414,9 +418,12 @@ TEST(SimulatorTest, LanePathGivesTheSameBitsForOtherStripShapes) {
   long exact_lanes = 0, exact_baseline = 0, exact_exact = 0;
   const std::vector<Vec3> lanes = run(Simulator::StepPath::Lanes, &exact_lanes);
   const std::vector<Vec3> baseline = run(Simulator::StepPath::LanesBaseline, &exact_baseline);
+  const std::vector<Vec3> avx2 = run(Simulator::StepPath::LanesAvx2, nullptr);
   const std::vector<Vec3> exact = run(Simulator::StepPath::Exact, &exact_exact);
   ASSERT_EQ(lanes.size(), baseline.size());
+  ASSERT_EQ(lanes.size(), avx2.size());
   EXPECT_EQ(0, std::memcmp(lanes.data(), baseline.data(), lanes.size() * sizeof(Vec3)));
+  EXPECT_EQ(0, std::memcmp(lanes.data(), avx2.data(), lanes.size() * sizeof(Vec3)));
   EXPECT_EQ(exact_lanes, exact_baseline);
   EXPECT_GT(exact_lanes, 0);            // some strips took the exact step,
   EXPECT_LT(exact_lanes, exact_exact);  // most were committed from the lanes

@@ -470,11 +470,16 @@ __attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) {
   for (int l0 = 0; l0 < W; l0 += 4)
     job.have_before ? blockBody<4, true>(job, l0) : blockBody<4, false>(job, l0);
 }
+/// The AVX2 kernel compiled with AVX-512VL: the same 256-bit operations (no FMA contraction, so the same
+/// bits), with 32 vector registers instead of 16, so fewer spills to the stack (the kernel's instructions
+/// 5,930 -> 5,106, 2026-11-26).
+__attribute__((target("avx2,avx512f,avx512vl"))) void stepBlockAvx512(BlockJob& job) {
+  for (int l0 = 0; l0 < W; l0 += 4)
+    job.have_before ? blockBody<4, true>(job, l0) : blockBody<4, false>(job, l0);
+}
 #endif
 
 }  // namespace
-
-bool haveAvx2() { return cpuHasAvx2(); }
 
 void fillLaneConstants(double* out, const int* point, int rows, const Vec3* rest_dir, const Vec3* styled_dir,
                        const double* length, const double* inv_inertia) {
@@ -490,14 +495,18 @@ void fillLaneConstants(double* out, const int* point, int rows, const Vec3* rest
     }
 }
 
-void stepBlock(BlockJob& job, bool baseline_only) {
+void stepBlock(BlockJob& job, Isa isa) {
 #if defined(HAIR_SIM_AVX2_DISPATCH)
-  if (!baseline_only && haveAvx2()) {
+  if (isa == Isa::Best && cpuHasAvx512vl()) {
+    stepBlockAvx512(job);
+    return;
+  }
+  if (isa != Isa::Baseline && cpuHasAvx2()) {
     stepBlockAvx2(job);
     return;
   }
 #endif
-  (void)baseline_only;
+  (void)isa;
   stepBlockBaseline(job);
 }
 

@@ -81,10 +81,11 @@ constexpr int kConstants = 8;
 void fillLaneConstants(double* out, const int* point, int rows, const Vec3* rest_dir, const Vec3* styled_dir,
                        const double* length, const double* inv_inertia);
 
-/// Advances one block (AVX2 when the CPU has it unless baseline_only).
-void stepBlock(BlockJob& job, bool baseline_only);
-/// Whether stepBlock uses AVX2 on this CPU.
-bool haveAvx2();
+/// The instruction sets stepBlock may use: the best the CPU has (AVX-512VL, else AVX2, else the x86-64
+/// baseline), at most AVX2, or the baseline alone. All give the same bits.
+enum class Isa { Best, UpToAvx2, Baseline };
+/// Advances one block with the best kernel the CPU has within `isa`.
+void stepBlock(BlockJob& job, Isa isa);
 
 }  // namespace lanes
 }  // namespace hair_sim

@@ -94,11 +94,12 @@ struct SpringPair {
 class Simulator {
  public:
   /// How step() advances the chains. Lanes (default): blocks of chains advanced together by loops the
-  /// compiler vectorises (AVX2 when the CPU has it), and the exact per-strip step for the strips that need
-  /// it (a body within reach of a segment's new place, a reaction constraint, a bend over the limit, a spring
-  /// pair outside its band). LanesBaseline: the same without AVX2 (bit-identical to Lanes). Exact: the
-  /// per-strip step for every strip (the reference the tests compare the lanes with).
-  enum class StepPath { Lanes, LanesBaseline, Exact };
+  /// compiler vectorises (AVX-512VL or AVX2 when the CPU has it), and the exact per-strip step for the strips
+  /// that need it (a body within reach of a segment's new place, a reaction constraint, a bend over the
+  /// limit, a spring pair outside its band). LanesBaseline: the same without AVX2 (bit-identical to Lanes).
+  /// LanesAvx2: the same with at most AVX2 (bit-identical to Lanes; for tests on CPUs with AVX-512). Exact:
+  /// the per-strip step for every strip (the reference the tests compare the lanes with).
+  enum class StepPath { Lanes, LanesBaseline, Exact, LanesAvx2 };
 
   /// Throws std::invalid_argument on invalid parameters or hairstyle.
   Simulator(Hairstyle hairstyle, PhysicsParameters parameters, std::vector<Body> bodies = {});
