@@ -18,30 +18,28 @@
 
 namespace hair_sim {
 
-/// Whether the AVX2 kernels run on this CPU (false without HAIR_SIM_AVX2_DISPATCH); asked once.
-inline bool cpuHasAvx2() {
+/// The instruction sets the kernels chosen at run time may use on this CPU (none without
+/// HAIR_SIM_AVX2_DISPATCH); asked once.
+struct CpuFeatures {
+  bool avx2 = false;
+  bool avx512vl = false;  ///< AVX-512F and AVX-512VL
+};
+inline const CpuFeatures& cpuFeatures() {
+  static const CpuFeatures features = [] {
+    CpuFeatures f;
 #if defined(HAIR_SIM_AVX2_DISPATCH)
-  static const bool has = [] {
     __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") != 0;
-  }();
-  return has;
-#else
-  return false;
+    f.avx2 = __builtin_cpu_supports("avx2") != 0;
+    f.avx512vl = f.avx2 && __builtin_cpu_supports("avx512f") != 0 && __builtin_cpu_supports("avx512vl") != 0;
 #endif
+    return f;
+  }();
+  return features;
 }
 
-/// Whether the CPU has AVX-512F and AVX-512VL (false without HAIR_SIM_AVX2_DISPATCH); asked once.
-inline bool cpuHasAvx512vl() {
-#if defined(HAIR_SIM_AVX2_DISPATCH)
-  static const bool has = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx512f") != 0 && __builtin_cpu_supports("avx512vl") != 0;
-  }();
-  return has;
-#else
-  return false;
-#endif
-}
+/// Whether the AVX2 kernels run on this CPU.
+inline bool cpuHasAvx2() { return cpuFeatures().avx2; }
+/// Whether the step's AVX-512VL kernel runs on this CPU.
+inline bool cpuHasAvx512vl() { return cpuFeatures().avx512vl; }
 
 }  // namespace hair_sim

@@ -248,9 +248,10 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   job.turbulence = f.turbulent ? in.turbulence : nullptr;
   job.head_pose = &in.head.pose;
   job.head_rotation_inverse = &f.Rt;
-  const lanes::Isa isa = step_path_ == StepPath::LanesBaseline ? lanes::Isa::Baseline
+  const lanes::BlockKernel kernel =
+      lanes::blockKernel(step_path_ == StepPath::LanesBaseline ? lanes::Isa::Baseline
                          : step_path_ == StepPath::LanesAvx2   ? lanes::Isa::UpToAvx2
-                                                               : lanes::Isa::Best;
+                                                               : lanes::Isa::Best);
   const std::size_t stride = static_cast<std::size_t>(lane_stride_rows_) * W;
   const std::size_t blocks = block_rows_.size();
   // One block of chains: reads only its own chains' state at the start of the substep, writes only their
@@ -262,7 +263,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     j.point = &lane_point_[blk * stride];
     j.constants = &lane_constants_[blk * stride * lanes::kConstants];
     j.bodies = nb > 0 ? &lane_bodies_[static_cast<std::size_t>(block_margin_[blk]) * nb] : nullptr;
-    lanes::stepBlock(j, isa);
+    kernel(j);
     std::copy(j.first_flagged_row, j.first_flagged_row + W, &block_flags_[blk * W]);
     std::copy(j.max_rate2, j.max_rate2 + W, &chain_max_rate2_[blk * W]);
   };

@@ -465,18 +465,17 @@ void stepBlockBaseline(BlockJob& job) {
 }
 
 #if defined(HAIR_SIM_AVX2_DISPATCH)
-__attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) {
+/// The block in 256-bit vectors (inlined into each target below).
+HAIR_SIM_ALWAYS_INLINE void stepBlock4(BlockJob& job) {
   static_assert(W % 4 == 0, "blocks of whole AVX2 vectors");
   for (int l0 = 0; l0 < W; l0 += 4)
     job.have_before ? blockBody<4, true>(job, l0) : blockBody<4, false>(job, l0);
 }
-/// The AVX2 kernel compiled with AVX-512VL: the same 256-bit operations (no FMA contraction, so the same
-/// bits), with 32 vector registers instead of 16, so fewer spills to the stack (the kernel's instructions
-/// 5,930 -> 5,106, 2026-11-26).
-__attribute__((target("avx2,avx512f,avx512vl"))) void stepBlockAvx512(BlockJob& job) {
-  for (int l0 = 0; l0 < W; l0 += 4)
-    job.have_before ? blockBody<4, true>(job, l0) : blockBody<4, false>(job, l0);
-}
+__attribute__((target("avx2"))) void stepBlockAvx2(BlockJob& job) { stepBlock4(job); }
+/// The same compiled with AVX-512VL: the same 256-bit operations (no FMA contraction, so the same bits), with
+/// 32 vector registers instead of 16, so fewer spills to the stack (the kernel's instructions 5,930 -> 5,106,
+/// 2026-11-26).
+__attribute__((target("avx2,avx512f,avx512vl"))) void stepBlockAvx512(BlockJob& job) { stepBlock4(job); }
 #endif
 
 }  // namespace
@@ -495,19 +494,13 @@ void fillLaneConstants(double* out, const int* point, int rows, const Vec3* rest
     }
 }
 
-void stepBlock(BlockJob& job, Isa isa) {
+BlockKernel blockKernel(Isa isa) {
 #if defined(HAIR_SIM_AVX2_DISPATCH)
-  if (isa == Isa::Best && cpuHasAvx512vl()) {
-    stepBlockAvx512(job);
-    return;
-  }
-  if (isa != Isa::Baseline && cpuHasAvx2()) {
-    stepBlockAvx2(job);
-    return;
-  }
+  if (isa == Isa::Best && cpuHasAvx512vl()) return stepBlockAvx512;
+  if (isa != Isa::Baseline && cpuHasAvx2()) return stepBlockAvx2;
 #endif
   (void)isa;
-  stepBlockBaseline(job);
+  return stepBlockBaseline;
 }
 
 }  // namespace lanes

@@ -84,8 +84,10 @@ void fillLaneConstants(double* out, const int* point, int rows, const Vec3* rest
 /// The instruction sets stepBlock may use: the best the CPU has (AVX-512VL, else AVX2, else the x86-64
 /// baseline), at most AVX2, or the baseline alone. All give the same bits.
 enum class Isa { Best, UpToAvx2, Baseline };
-/// Advances one block with the best kernel the CPU has within `isa`.
-void stepBlock(BlockJob& job, Isa isa);
+/// A kernel that advances one block.
+using BlockKernel = void (*)(BlockJob& job);
+/// The best kernel the CPU has within `isa` (chosen once per substep, not per block).
+BlockKernel blockKernel(Isa isa);
 
 }  // namespace lanes
 }  // namespace hair_sim
