@@ -284,7 +284,7 @@ TEST(SimulatorCollisionTest, SpringForceFollowsEquation11OutsideTheBandOnly) {
       const std::size_t i = static_cast<std::size_t>(k), parent = i - 2;
       const Vec3 n = (before[i] - before[parent]).normalized();
       const Vec3 n_after = (after[i] - after[parent]).normalized();
-      const double turned = std::atan2(n.cross(n_after).norm(), n.dot(n_after));
+      const double turned = test::angleBetween(n, n_after);
       const double expected = dt * dt * (0.5 * d * n.cross(force[i])).norm() / inertia;
       EXPECT_NEAR(turned, expected, 1e-9 * expected + 1e-12) << "point " << k;
       if (k % 2 == (k < 10 ? 1 : 0)) {

@@ -227,7 +227,7 @@ TEST(SimulatorTest, EveryHeadOrientationStaysFiniteWithoutSpins) {
             if (bound[k] == 0.0) continue;     // roots
             const std::size_t parent = k - 2;  // 2 columns per strip in the default hairstyle
             const Vec3 a = (before[k] - before[parent]).normalized(), b = (x[k] - x[parent]).normalized();
-            const double rate = std::atan2(a.cross(b).norm(), a.dot(b)) / p.substep;
+            const double rate = test::angleBetween(a, b) / p.substep;
             worst_ratio = std::max(worst_ratio, rate / bound[k]);
           }
         }
@@ -608,7 +608,7 @@ TEST(SimulatorTest, TheBendLimitActsAlikeOnEveryPath) {
     for (std::size_t c = 0; c < 2; ++c) {
       const Vec3 rest = (styled[c + 2] - styled[c]).normalized();
       const Vec3 now = ((*run)[c + 2] - (*run)[c]).normalized();
-      const double bend = std::atan2(rest.cross(now).norm(), rest.dot(now));
+      const double bend = test::angleBetween(rest, now);
       if (run == &free) {
         EXPECT_GT(bend, 0.3) << "column " << c;  // what the wind does without the limit
       } else {

@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
@@ -29,6 +30,9 @@ inline std::string writeTemp(const std::string& name, const std::string& text) {
   out << text;
   return path;
 }
+
+/// The angle (rad, in [0, pi]) between two directions, well conditioned at small angles.
+inline double angleBetween(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
 
 /// A hairstyle of one strip with `columns` straight columns of `rows` points hanging from the top of
 /// a sphere of radius 0.1 m, each segment of length d, tilted by `tilt` rad about +x from straight down.
