@@ -118,12 +118,17 @@ def closest_to_bodies(processed, bodies, margins, body_pose):
     worst_root = (float('inf'), None)
     for stamp, head, msg in processed:
         poses = [body_pose(body, head, msg.header.stamp) for body in bodies]
-        own = [(body.name, body.sphere_map(pose)) for body, pose in zip(bodies, poses)]
+        maps = {}  # margin -> the bodies' sphere maps inflated by it (one margin for most hairstyles)
+
+        def inflated_by(margin):
+            if margin not in maps:
+                maps[margin] = [(body.name, body.sphere_map(pose, margin)) for body, pose in zip(bodies, poses)]
+            return maps[margin]
+
         for s, strip in enumerate(msg.strips):
-            inflated = [(body.name, body.sphere_map(pose, margins[s])) for body, pose in zip(bodies, poses)]
             for k, p in enumerate(strip_points(strip)):
                 root = k < strip.columns
-                for name, (m, o) in own if root else inflated:
+                for name, (m, o) in inflated_by(0.0 if root else margins[s]):
                     qx = m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z - o[0]
                     qy = m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z - o[1]
                     qz = m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z - o[2]
