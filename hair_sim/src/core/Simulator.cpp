@@ -1087,9 +1087,12 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
   const int p_begin = partner_start_[static_cast<std::size_t>(point)];
   const int p_end = partner_start_[static_cast<std::size_t>(point) + 1];
   if (p_begin == p_end) return result;
-  // Projects the end of direction u into every band (sweeps); returns whether anything moved.
+  // Projects the end of direction u into every band (sweeps); returns whether anything moved. `settled`: the
+  // last sweep moved nothing (every band holds at the u returned), not the cap of 8 sweeps.
+  bool settled = false;
   auto project = [&](Vec3& u) {
     bool moved = false;
+    settled = false;
     for (int sweep = 0; sweep < 8; ++sweep) {
       bool any = false;
       for (int q = p_begin; q < p_end; ++q) {
@@ -1116,25 +1119,34 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
         }
         const double rho = std::sqrt(d * d - h * h);
         Vec3 perp = (end - pivot) - (end - pivot).dot(axis) * axis;
-        if (perp.norm() < 1e-12) perp = axis.unitOrthogonal();
-        perp.normalize();
+        const double perp_norm = perp.norm();  // (normalize() divides by this same square root)
+        if (perp_norm < 1e-12) {
+          perp = axis.unitOrthogonal();
+          perp.normalize();
+        } else {
+          perp /= perp_norm;
+        }
         // The nearest point of the circle first; if a body is in the way, the points of the circle
         // farther and farther round from it (steps of pi/16 each way) until one is clear.
+        // (None clear: the nearest point, computed only then.)
         const Vec3 side = axis.cross(perp);
-        Vec3 chosen = (h * axis + rho * perp).normalized();
         const CircleStep* steps = circleSteps();
-        for (int k = 0; k <= kCircleSteps; ++k) {
+        bool found = false;
+        for (int k = 0; k <= kCircleSteps && !found; ++k) {
           const CircleStep& step = steps[k];
           const Vec3 cand = (h * axis + rho * (step.cos * perp + step.sin * side)).normalized();
           if (validBodies(cand)) {
-            chosen = cand;
-            break;
+            u = cand;
+            found = true;
           }
         }
-        u = chosen;
+        if (!found) u = (h * axis + rho * perp).normalized();
         any = true;
       }
-      if (!any) break;
+      if (!any) {
+        settled = true;
+        break;
+      }
       moved = true;
     }
     return moved;
@@ -1148,6 +1160,10 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
     if (!validBodies(p)) {
       p = escapeBodies(pivot, d, p, now, !before.empty());
       if (!validBodies(p)) break;
+    } else if (settled) {
+      // Every band holds at p (project's last sweep), which is clear: the next round's project(p) would
+      // repeat that sweep, move nothing and stop here.
+      return p;
     }
     u = p;
   }
