@@ -94,8 +94,14 @@ def main():
     elif node:
         lines += ['', 'node: ' + node['error']]
     cpu = context.get('mhz_per_cpu')
-    lines += ['', 'Machine: %s CPUs%s; Release build; medians of %s repetitions (%s).' % (
-        context.get('num_cpus', '?'), ' at %s MHz' % cpu if cpu else '',
+    # hair_sim_bench's own context: the instruction sets its kernels ran with (the same code is slower
+    # where the CPU, or the hypervisor, hides AVX-512).
+    kernels = ''
+    if 'step_kernel' in context:
+        kernels = '; the step\'s lanes kernel in %s, the tessellation in %s' % (
+            context['step_kernel'], context.get('tessellation_kernel', '?'))
+    lines += ['', 'Machine: %s CPUs%s%s; Release build; medians of %s repetitions (%s).' % (
+        context.get('num_cpus', '?'), ' at %s MHz' % cpu if cpu else '', kernels,
         bench[next(iter(bench))].get('repetitions', '?') if bench else '?', context.get('date', ''))]
     print('\n'.join(lines))
 

@@ -9,7 +9,8 @@
 /// `valgrind --tool=callgrind --toggle-collect=step_profile_measured`). Prints one JSON line: strips,
 /// control points, ns per control-point update over the measured substeps, the share of strips that took
 /// the exact step in them, and state_hash, the FNV-1a hash of every control point's position (head frame)
-/// at the end: the same for the same inputs on any path, thread count or instruction set.
+/// at the end: the same for the same inputs on any path, thread count or instruction set; and kernel, the
+/// instruction set the path's lanes kernel ran with on this CPU (Simulator::kernelInstructionSet).
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -109,10 +110,12 @@ int main(int argc, char** argv) {
     const double strip_count = static_cast<double>(sim.hairstyle().strips.size());
     std::printf(
         "{\"strips\": %ld, \"control_points\": %d, \"path\": \"%s\", \"threads\": %ld, \"warmup\": %ld, "
-        "\"substeps\": %ld, \"ns_per_update\": %.1f, \"exact_share\": %.4f, \"state_hash\": \"%016llx\"}\n",
+        "\"substeps\": %ld, \"ns_per_update\": %.1f, \"exact_share\": %.4f, \"state_hash\": \"%016llx\", "
+        "\"kernel\": \"%s\"}\n",
         strips, sim.controlPointCount(), path_name.c_str(), threads, warmup, substeps,
         1e9 * seconds / (static_cast<double>(substeps) * sim.controlPointCount()),
-        exact / (static_cast<double>(substeps) * strip_count), static_cast<unsigned long long>(hash));
+        exact / (static_cast<double>(substeps) * strip_count), static_cast<unsigned long long>(hash),
+        Simulator::kernelInstructionSet(sim.stepPath()));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "hair_sim_step_profile: %s\n", e.what());
     return 1;

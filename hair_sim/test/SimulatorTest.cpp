@@ -5,12 +5,16 @@
 
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <set>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "TestUtil.hpp"
 #include "hair_sim/core/events/EventSchedule.hpp"
+#include "hair_sim/core/geometry/Tessellator.hpp"
 #include "hair_sim/core/model/HairstyleGenerator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
@@ -428,6 +432,32 @@ TEST(SimulatorTest, LanePathGivesTheSameBitsForOtherStripShapes) {
   EXPECT_GT(exact_lanes, 0);            // some strips took the exact step,
   EXPECT_LT(exact_lanes, exact_exact);  // most were committed from the lanes
   EXPECT_LT(maxDistance(lanes, exact), 1e-8);
+}
+
+TEST(SimulatorTest, KernelInstructionSetsFollowTheCpuFlags) {
+  // What the benchmarks report as the kernels' instruction sets, against the flags the kernel lists in
+  // /proc/cpuinfo (x86-64 Linux): AVX-512VL needs avx512f and avx512vl, and the dispatch asks for AVX2 too.
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  std::set<std::string> flags;
+  while (std::getline(cpuinfo, line))
+    if (line.rfind("flags", 0) == 0) {
+      std::istringstream words(line.substr(line.find(':') + 1));
+      for (std::string w; words >> w;) flags.insert(w);
+      break;
+    }
+#if !defined(__x86_64__)
+  GTEST_SKIP() << "the kernels' dispatch is for x86-64";
+#endif
+  if (flags.empty()) GTEST_SKIP() << "no flags line in /proc/cpuinfo";
+  const bool avx2 = flags.count("avx2") > 0;
+  const bool avx512 = avx2 && flags.count("avx512f") > 0 && flags.count("avx512vl") > 0;
+  using P = Simulator::StepPath;
+  EXPECT_STREQ(Simulator::kernelInstructionSet(P::Lanes), avx512 ? "AVX-512VL" : avx2 ? "AVX2" : "x86-64");
+  EXPECT_STREQ(Simulator::kernelInstructionSet(P::LanesAvx2), avx2 ? "AVX2" : "x86-64");
+  EXPECT_STREQ(Simulator::kernelInstructionSet(P::LanesBaseline), "x86-64");
+  EXPECT_STREQ(Simulator::kernelInstructionSet(P::Exact), "none");
+  EXPECT_STREQ(Tessellator::instructionSet(), avx2 ? "AVX2" : "SSE2");
 }
 
 TEST(SimulatorTest, HelperThreadsGiveTheSameBits) {

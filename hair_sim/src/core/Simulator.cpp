@@ -196,6 +196,19 @@ void Simulator::buildLanes() {
   strip_exact_from_.assign(hairstyle_.strips.size(), kNoExact);
 }
 
+namespace {
+/// The instruction sets a Lanes path's kernel may use.
+lanes::Isa laneIsa(Simulator::StepPath path) {
+  return path == Simulator::StepPath::LanesBaseline ? lanes::Isa::Baseline
+         : path == Simulator::StepPath::LanesAvx2   ? lanes::Isa::UpToAvx2
+                                                    : lanes::Isa::Best;
+}
+}  // namespace
+
+const char* Simulator::kernelInstructionSet(StepPath path) {
+  return path == StepPath::Exact ? "none" : lanes::kernelName(laneIsa(path));
+}
+
 void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally) {
   constexpr int W = lanes::kLanes;
   const std::size_t nb = bodies_.size();
@@ -248,10 +261,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   job.turbulence = f.turbulent ? in.turbulence : nullptr;
   job.head_pose = &in.head.pose;
   job.head_rotation_inverse = &f.Rt;
-  const lanes::BlockKernel kernel =
-      lanes::blockKernel(step_path_ == StepPath::LanesBaseline ? lanes::Isa::Baseline
-                         : step_path_ == StepPath::LanesAvx2   ? lanes::Isa::UpToAvx2
-                                                               : lanes::Isa::Best);
+  const lanes::BlockKernel kernel = lanes::blockKernel(laneIsa(step_path_));
   const std::size_t stride = static_cast<std::size_t>(lane_stride_rows_) * W;
   const std::size_t blocks = block_rows_.size();
   // One block of chains: reads only its own chains' state at the start of the substep, writes only their

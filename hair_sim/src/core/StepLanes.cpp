@@ -503,5 +503,15 @@ BlockKernel blockKernel(Isa isa) {
   return stepBlockBaseline;
 }
 
+const char* kernelName(Isa isa) {
+#if defined(HAIR_SIM_AVX2_DISPATCH)
+  const BlockKernel kernel = blockKernel(isa);
+  if (kernel == stepBlockAvx512) return "AVX-512VL";
+  if (kernel == stepBlockAvx2) return "AVX2";
+#endif
+  (void)isa;
+  return "x86-64";
+}
+
 }  // namespace lanes
 }  // namespace hair_sim

@@ -1514,6 +1514,19 @@ void Tessellator::appendTriangles(const StripMesh& mesh, std::uint32_t first_ver
   }
 }
 
+const char* Tessellator::instructionSet() {
+#if defined(HAIR_SIM_AVX2)
+  if (cpuHasAvx2()) {
+    return "AVX2";
+  }
+#endif
+#if defined(HAIR_SIM_SSE2)
+  return "SSE2";
+#else
+  return "scalar";
+#endif
+}
+
 const char* Tessellator::methodName(TessellationMethod method) {
   switch (method) {
     case TessellationMethod::ForwardDifferencing:

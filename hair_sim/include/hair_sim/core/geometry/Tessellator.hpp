@@ -143,6 +143,8 @@ class Tessellator {
 
   /// "ForwardDifferencing", "DeBoor", "CachedBasis".
   static const char* methodName(TessellationMethod method);
+  /// The instruction set CachedBasis's kernels run with on this CPU: "AVX2", "SSE2" or "scalar".
+  static const char* instructionSet();
 
  private:
   /// Basis weights of one sample, folded onto `width` consecutive real control points starting at `first`
