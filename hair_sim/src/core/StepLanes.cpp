@@ -510,7 +510,11 @@ const char* kernelName(Isa isa) {
   if (kernel == stepBlockAvx2) return "AVX2";
 #endif
   (void)isa;
+#if defined(__x86_64__)
   return "x86-64";
+#else
+  return "baseline";  // the generic vector code, as the compiler targets this build
+#endif
 }
 
 }  // namespace lanes

@@ -88,7 +88,7 @@ enum class Isa { Best, UpToAvx2, Baseline };
 using BlockKernel = void (*)(BlockJob& job);
 /// The best kernel the CPU has within `isa` (chosen once per substep, not per block).
 BlockKernel blockKernel(Isa isa);
-/// The instruction set of blockKernel(isa): "AVX-512VL", "AVX2" or "x86-64".
+/// The instruction set of blockKernel(isa): "AVX-512VL", "AVX2" or "x86-64" ("baseline" off x86-64).
 const char* kernelName(Isa isa);
 
 }  // namespace lanes

@@ -125,8 +125,8 @@ class Simulator {
   void setStepPath(StepPath path) { step_path_ = path; }
   StepPath stepPath() const { return step_path_; }
   /// The instruction set the lanes kernel of `path` runs with on this CPU: "AVX-512VL", "AVX2" or "x86-64"
-  /// (the baseline); "none" for the Exact path. (Benchmarks name it: the same code is slower without
-  /// AVX-512.)
+  /// (the baseline; "baseline" on other architectures); "none" for the Exact path. (Benchmarks name it: the
+  /// same code is slower without AVX-512.)
   static const char* kernelInstructionSet(StepPath path);
   /// Threads for step() (1 = the calling thread only, the default): threads - 1 helper threads scan parts of
   /// the spring pairs (every path, from kMinPairsForHelpers pairs) and, on the Lanes paths, compute blocks
