@@ -1142,12 +1142,13 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
         const Vec3 side = axis.cross(perp);
         const CircleStep* steps = circleSteps();
         bool found = false;
-        for (int k = 0; k <= kCircleSteps && !found; ++k) {
+        for (int k = 0; k <= kCircleSteps; ++k) {
           const CircleStep& step = steps[k];
           const Vec3 cand = (h * axis + rho * (step.cos * perp + step.sin * side)).normalized();
           if (validBodies(cand)) {
             u = cand;
             found = true;
+            break;
           }
         }
         if (!found) u = (h * axis + rho * perp).normalized();
