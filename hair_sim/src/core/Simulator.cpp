@@ -103,7 +103,6 @@ void Simulator::buildChains() {
   const int n = hairstyle_.controlPointCount();
   const std::size_t sn = static_cast<std::size_t>(n);
   positions_.assign(sn, Vec3::Zero());
-  previous_mid_.assign(sn, Vec3::Zero());
   velocity_.assign(sn, Vec3::Zero());
   direction_.assign(sn, Vec3::UnitZ());
   rate_.assign(sn, Vec3::Zero());
@@ -191,7 +190,6 @@ void Simulator::buildLanes() {
   new_direction_.assign(n, Vec3::UnitZ());
   new_rate_.assign(n, Vec3::Zero());
   new_velocity_.assign(n, Vec3::Zero());
-  new_mid_.assign(n, Vec3::Zero());
   strip_committed_.assign(hairstyle_.strips.size(), -1);
   strip_exact_from_.assign(hairstyle_.strips.size(), kNoExact);
 }
@@ -248,13 +246,11 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   job.direction = direction_.data();
   job.velocity = velocity_.data();
   job.rate = rate_.data();
-  job.previous_mid = previous_mid_.data();
   job.spring_force = spring_force_.data();
   job.out_position = new_position_.data();
   job.out_direction = new_direction_.data();
   job.out_rate = new_rate_.data();
   job.out_velocity = new_velocity_.data();
-  job.out_mid = new_mid_.data();
   job.out_flag = lane_flag_.data();
   job.body_count = static_cast<int>(nb);
   job.have_before = have_bodies_before_;
@@ -364,7 +360,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
         new_direction_[i] = direction_[i];
         new_rate_[i] = rate_[i];
         new_velocity_[i] = velocity_[i];
-        new_mid_[i] = previous_mid_[i];
       };
       if (exact_relaxed_) {
         for (int p = 0; p < s.pointCount(); ++p) copyBack(static_cast<std::size_t>(base + p));
@@ -388,7 +383,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
   direction_.swap(new_direction_);
   rate_.swap(new_rate_);
   velocity_.swap(new_velocity_);
-  previous_mid_.swap(new_mid_);
   // The pairs with a root (no band pair) at the state's places: spring_dist2_ is then whole for the next
   // scan.
   for (int k : root_springs_) {
@@ -405,7 +399,6 @@ void Simulator::syncLaneBuffers() {
   new_direction_ = direction_;
   new_rate_ = rate_;
   new_velocity_ = velocity_;
-  new_mid_ = previous_mid_;
 }
 
 Simulator::~Simulator() = default;
@@ -428,7 +421,6 @@ double Simulator::commitLanes(std::size_t i) {
   direction_[i] = new_direction_[i];
   rate_[i] = new_rate_[i];
   velocity_[i] = new_velocity_[i];
-  previous_mid_[i] = new_mid_[i];
   moved_in_step_[i] = sweep_;
   return rate_[i].squaredNorm();
 }
@@ -506,16 +498,6 @@ void Simulator::reset() {
     direction_[i] = styled_dir_[i];
     rate_[i].setZero();
     velocity_[i].setZero();
-  }
-  offset = 0;
-  for (const Strip& s : hairstyle_.strips) {
-    for (int r = 1; r < s.rows; ++r)
-      for (int c = 0; c < s.columns; ++c) {
-        const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
-        previous_mid_[i] =
-            0.5 * (positions_[i] + positions_[static_cast<std::size_t>(offset + s.index(r - 1, c))]);
-      }
-    offset += s.pointCount();
   }
   steps_ = 0;
   max_rate_ = 0.0;
@@ -1500,7 +1482,6 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
       rate_[i] = rotationVectorBetween(start_dir_[local], direction_[i]);
       const Vec3 mid = pivot + 0.5 * length_[i] * direction_[i];
       velocity_[i] = (mid - start_mid_[local]) / dt;
-      previous_mid_[i] = mid;
     }
 }
 
@@ -1523,7 +1504,6 @@ void Simulator::setShape(const std::vector<Vec3>& target) {
         positions_[i] = positions_[parent] + length_[i] * direction_[i];
         rate_[i].setZero();
         velocity_[i].setZero();
-        previous_mid_[i] = positions_[parent] + 0.5 * length_[i] * direction_[i];
         parent = i;
       }
     }
@@ -1664,8 +1644,15 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
     positions_[i] = pivot + d * next;
     moved_in_step_[i] = sweep_;
     const Vec3 mid_next = pivot + 0.5 * d * next;
-    velocity_[i] = (mid_next - previous_mid_[i]) / dt;
-    previous_mid_[i] = mid_next;
+    velocity_[i] = (mid_next - start_mid_[i - static_cast<std::size_t>(offset)]) / dt;
+  };
+  // Point i's segment midpoint at the start of the substep, from its parent's start position (row r >= 2:
+  // kept in start_pos_ when the sweep reached it; row 1: a root, which never moves) and its own start
+  // direction: bit for bit the midpoint the last substep computed as pivot + d/2 direction (place,
+  // relaxStrip, the lanes), so it is not stored.
+  auto midAtStart = [&](int r, std::size_t parent, std::size_t i) -> Vec3 {
+    const Vec3& pivot = r == 1 ? positions_[parent] : start_pos_[parent - static_cast<std::size_t>(offset)];
+    return pivot + 0.5 * length_[i] * direction_[i];
   };
   for (int c = 0; c < s.columns; ++c) {
     // The free step (the dynamics before the bend limit and the constraints) of each row is taken from its
@@ -1714,7 +1701,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
         // step would after its own free step; the start state is kept for relaxStrip.
         start_pos_[local] = positions_[i];
         start_dir_[local] = direction_[i];
-        start_mid_[local] = previous_mid_[i];
+        start_mid_[local] = midAtStart(r, parent, i);
         const Vec3& free_next = new_direction_[i];
         free_dir_[local] = free_next;
         free_pivot = new_position_[i];
@@ -1756,7 +1743,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       const Vec3& v = velocity_[i];  // midpoint velocity relative to the head over the last substep
       start_pos_[local] = positions_[i];
       start_dir_[local] = n;
-      start_mid_[local] = previous_mid_[i];
+      start_mid_[local] = midAtStart(r, parent, i);
       // (6): F = rho d (g + a) + d f with the fictitious acceleration a of the head frame
       // (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the hair.
       const Vec3 a = -acc0 - alpha.cross(mid) - omega.cross(omega.cross(mid)) - 2.0 * omega.cross(v);

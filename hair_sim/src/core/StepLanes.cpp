@@ -206,6 +206,10 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
   const double rx0 = job.air0[0], ry0 = job.air0[1], rz0 = job.air0[2];
 
   V px, py, pz;  // pivot: the parent's new position
+  // The parent's position at the start of the substep: the segment's midpoint then is op + d/2 n, bit for bit
+  // the midpoint the last substep computed (as px + d/2 k), as every path computes it (stepStrip's
+  // midAtStart).
+  V opx, opy, opz;
   V q0 = splat<V>(1.0), q1 = splat<V>(0.0), q2 = splat<V>(0.0), q3 = splat<V>(0.0), q4 = splat<V>(1.0),
     q5 = splat<V>(0.0), q6 = splat<V>(0.0), q7 = splat<V>(0.0),
     q8 = splat<V>(1.0);  // rotation of the parent from its styled frame
@@ -217,6 +221,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     const Vec3 p = i0 >= 0 ? job.positions[i0] : Vec3::Zero();
     px[l] = p.x(), py[l] = p.y(), pz[l] = p.z();
   }
+  opx = px, opy = py, opz = pz;  // (a root never moves)
 
   for (int r = 1; r < job.rows; ++r) {
     const int* pt = job.point + r * W + l0;
@@ -240,10 +245,11 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     const double* k_row = job.constants + static_cast<std::ptrdiff_t>(r) * kConstants * W + l0;
     ux = loadLanes<V>(k_row + 0 * W), uy = loadLanes<V>(k_row + 1 * W), uz = loadLanes<V>(k_row + 2 * W);
     sx = loadLanes<V>(k_row + 3 * W), sy = loadLanes<V>(k_row + 4 * W), sz = loadLanes<V>(k_row + 5 * W);
-    loadVec3<N>(job.previous_mid, idx, pairs, mx, my, mz);
     loadVec3<N>(job.positions, idx, pairs, ex, ey, ez);
     d = loadLanes<V>(k_row + 6 * W);
     ii = loadLanes<V>(k_row + 7 * W);
+    const V hd = 0.5 * d;
+    mx = opx + hd * nx, my = opy + hd * ny, mz = opz + hd * nz;
     if (!all_active) {  // an idle lane: a still vertical segment, never written back
       const V zero = splat<V>(0.0), one = splat<V>(1.0);
       nx = sel(active, nx, zero), ny = sel(active, ny, zero), nz = sel(active, nz, one);
@@ -255,7 +261,6 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     }
 
     // Segment midpoints; the turbulence is evaluated there (world points), lane by lane.
-    const V hd = 0.5 * d;
     const V cx = px + hd * nx, cy = py + hd * ny, cz = pz + hd * nz;
     V tx = splat<V>(0.0), ty = splat<V>(0.0), tz = splat<V>(0.0);
     if (job.turbulence)
@@ -446,10 +451,10 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     storeVec3<N>(job.out_rate, pt, pairs, Wx, Wy, Wz);
     storeVec3<N>(job.out_position, pt, pairs, nex, ney, nez);
     storeVec3<N>(job.out_velocity, pt, pairs, velx, vely, velz);
-    storeVec3<N>(job.out_mid, pt, pairs, midx, midy, midz);
     for (int l = 0; l < N; ++l)
       if (pt[l] >= 0) job.out_flag[pt[l]] = static_cast<unsigned char>(code[l]);
     px = nex, py = ney, pz = nez;
+    opx = ex, opy = ey, opz = ez;
     for (int l = 0; l < N; ++l)
       if (flag[l] && first_row[l] == 0) first_row[l] = r;
   }

@@ -44,7 +44,6 @@ struct BlockJob {
   const Vec3* direction = nullptr;
   const Vec3* velocity = nullptr;
   const Vec3* rate = nullptr;
-  const Vec3* previous_mid = nullptr;
   const Vec3* spring_force = nullptr;
   /// The block's segment constants in lane order, [row][kConstants][kLanes] (rows of the lane stride): rest
   /// direction x y z, styled direction x y z, length, inverse inertia; an idle lane's are those of a still
@@ -55,7 +54,6 @@ struct BlockJob {
   Vec3* out_direction = nullptr;
   Vec3* out_rate = nullptr;
   Vec3* out_velocity = nullptr;
-  Vec3* out_mid = nullptr;
   /// Per point, what the exact step must do there: kPointFull alone, else kPointBend and kPointBodies, either
   /// or both (5), or 0: nothing.
   unsigned char* out_flag = nullptr;

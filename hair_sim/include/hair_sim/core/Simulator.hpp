@@ -319,8 +319,9 @@ class Simulator {
   double max_rate_ = 0.0;
   std::vector<int> strip_offset_;
   // Per control point k (the segment that ends at k for rows >= 1), head frame.
+  // (The segment's midpoint at the end of the last substep, which the next substep's velocity starts from, is
+  // not stored: it is the parent's position + d/2 direction, bit for bit, as every path computes it.)
   std::vector<Vec3> positions_;
-  std::vector<Vec3> previous_mid_;   ///< segment midpoint at the end of the last substep
   std::vector<Vec3> velocity_;       ///< midpoint velocity relative to the head over the last substep
   std::vector<Vec3> direction_;      ///< unit segment direction n
   std::vector<Vec3> rate_;           ///< w: rotation vector of the last substep (rad)
@@ -413,9 +414,9 @@ class Simulator {
   std::vector<int> block_rows_, block_margin_, lane_point_, lane_strip_;
   int lane_stride_rows_ = 0;  ///< rows per block in lane_point_
   /// The lanes' results, the state at the end of the substep for the strips committed from them: stepLanes
-  /// swaps them with the state (positions_, direction_, rate_, velocity_, previous_mid_) after copying in the
+  /// swaps them with the state (positions_, direction_, rate_, velocity_) after copying in the
   /// points the exact step placed (the whole strip after relaxStrip).
-  std::vector<Vec3> new_position_, new_direction_, new_rate_, new_velocity_, new_mid_;
+  std::vector<Vec3> new_position_, new_direction_, new_rate_, new_velocity_;
   /// Per strip, the sweep (sweep_) in which it was last committed from the lanes (-1: none).
   std::vector<long> strip_committed_;
   /// Per strip, the first place of its sweep (column * rows + row) that takes the exact step, or kNoExact.
