@@ -514,7 +514,6 @@ void Simulator::buildSprings() {
   // The last substep's forces and measures go with the pairs (without springs step() computes none to
   // replace them): no force, and the ratios and gap of a Simulator without springs.
   std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
-  spring_touched_.clear();
   min_ratio_[0] = min_ratio_[1] = max_ratio_[0] = max_ratio_[1] = 1.0;
   min_gap_ = 0.0;
   std::vector<Vec3> styled;  // pairs and rest lengths come from the styled shape
@@ -657,7 +656,6 @@ void Simulator::buildSprings() {
   spring_a_.resize(count);
   spring_b_.resize(count);
   spring_outside_.resize(count);
-  spring_touched_.reserve(2 * count);  // (push_back never reallocates in computeSpringForces)
   spring_within_ = 0;
   for (std::size_t k = 0; k < count; ++k) {
     const SpringPair& p = springs_[k];
@@ -777,9 +775,10 @@ std::size_t scanSprings(const Vec3* positions, const double* dist2, const int* a
 }  // namespace
 
 void Simulator::computeSpringForces() {
-  // Only the points the last substep's springs pushed have a force to clear.
-  for (int i : spring_touched_) spring_force_[static_cast<std::size_t>(i)].setZero();
-  spring_touched_.clear();
+  // Every point's force cleared in one sweep of the array: at 10,000 strips about 22,000 pairs a substep are
+  // outside their band (44,000 ends of 100,000 points), and clearing those ends one by one, at random in the
+  // hair, took longer (the sweep: 0.975-0.987 x the step's time, 2026-11-28).
+  std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
   const double ks = params_.spring_stiffness;
   const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
   // The scan (scanSprings) finds the extremes and the pairs outside their dead band (most pairs are within
@@ -850,8 +849,6 @@ void Simulator::computeSpringForces() {
           (ks * x / length) * delta;  // pulls a toward b when stretched, pushes apart when compressed
       force[p.a] += f;
       force[p.b] -= f;
-      spring_touched_.push_back(p.a);
-      spring_touched_.push_back(p.b);
     }
   auto ratio = [](double r2, double none) { return r2 == none ? 1.0 : std::sqrt(r2); };
   min_ratio_[0] = ratio(e.min_between, 1e300), max_ratio_[0] = ratio(e.max_between, 0.0);

@@ -345,7 +345,6 @@ class Simulator {
   std::vector<int> spring_a_, spring_b_;  ///< per spring pair, its points (springs_[k].a, .b)
   std::size_t spring_within_ = 0;         ///< springs_[0, spring_within_) are the pairs within strips
   std::vector<int> spring_outside_;       ///< computeSpringForces: the pairs outside their band
-  std::vector<int> spring_touched_;       ///< the points with a spring force (the others have none)
   // The sweep (sweep_) in which stepStrip gave a point its final position (the points of a strip committed
   // from the lanes are marked by strip_committed_ instead).
   std::vector<long> moved_in_step_;
