@@ -1647,9 +1647,9 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
   // kept in start_pos_ when the sweep reached it; row 1: a root, which never moves) and its own start
   // direction: bit for bit the midpoint the last substep computed as pivot + d/2 direction (place,
   // relaxStrip, the lanes), so it is not stored.
-  auto midAtStart = [&](int r, std::size_t parent, std::size_t i) -> Vec3 {
+  auto midAtStart = [&](int r, std::size_t parent, std::size_t i, double d) -> Vec3 {
     const Vec3& pivot = r == 1 ? positions_[parent] : start_pos_[parent - static_cast<std::size_t>(offset)];
-    return pivot + 0.5 * length_[i] * direction_[i];
+    return pivot + 0.5 * d * direction_[i];
   };
   for (int c = 0; c < s.columns; ++c) {
     // The free step (the dynamics before the bend limit and the constraints) of each row is taken from its
@@ -1690,6 +1690,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
       const std::size_t local = i - static_cast<std::size_t>(offset);
       const bool before_from = c * s.rows + r < from;
+      const double d = length_[i];
       if (before_from || (from_lanes && !own_dynamics && !(lane_flag_[i] & lanes::kPointFull))) {
         // The lanes' free step is this point's. Before the place the exact step takes over, it is taken as it
         // is (nothing acted there). After it, the bend limit applies where the lanes flagged it (kPointBend);
@@ -1698,12 +1699,11 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
         // step would after its own free step; the start state is kept for relaxStrip.
         start_pos_[local] = positions_[i];
         start_dir_[local] = direction_[i];
-        start_mid_[local] = midAtStart(r, parent, i);
+        start_mid_[local] = midAtStart(r, parent, i, d);
         const Vec3& free_next = new_direction_[i];
         free_dir_[local] = free_next;
         free_pivot = new_position_[i];
         const Vec3& pivot = positions_[parent];
-        const double d = length_[i];
         const Vec3 limited =
             (lane_flag_[i] & lanes::kPointBend) ? limitBend(restOf(r, i), free_next) : free_next;
         // (The end as resolveCollisions' band projection computes it, not new_position_: the same bits only
@@ -1732,7 +1732,6 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       }
       diverged = true;  // the exact step's own rounding from here down the column
       own_dynamics = true;
-      const double d = length_[i];
       const double inv_i = inv_inertia_[i];
       const Vec3& pivot = positions_[parent];
       const Vec3 n = direction_[i];
@@ -1740,7 +1739,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       const Vec3& v = velocity_[i];  // midpoint velocity relative to the head over the last substep
       start_pos_[local] = positions_[i];
       start_dir_[local] = n;
-      start_mid_[local] = midAtStart(r, parent, i);
+      start_mid_[local] = midAtStart(r, parent, i, d);
       // (6): F = rho d (g + a) + d f with the fictitious acceleration a of the head frame
       // (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the hair.
       const Vec3 a = -acc0 - alpha.cross(mid) - omega.cross(omega.cross(mid)) - 2.0 * omega.cross(v);

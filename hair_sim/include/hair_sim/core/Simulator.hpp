@@ -413,8 +413,8 @@ class Simulator {
   std::vector<int> block_rows_, block_margin_, lane_point_, lane_strip_;
   int lane_stride_rows_ = 0;  ///< rows per block in lane_point_
   /// The lanes' results, the state at the end of the substep for the strips committed from them: stepLanes
-  /// swaps them with the state (positions_, direction_, rate_, velocity_) after copying in the
-  /// points the exact step placed (the whole strip after relaxStrip).
+  /// swaps them with the state (positions_, direction_, rate_, velocity_) after copying in the points the
+  /// exact step placed (the whole strip after relaxStrip).
   std::vector<Vec3> new_position_, new_direction_, new_rate_, new_velocity_;
   /// Per strip, the sweep (sweep_) in which it was last committed from the lanes (-1: none).
   std::vector<long> strip_committed_;
