@@ -1589,6 +1589,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
   const bool turbulent = f.turbulent;
   static const std::vector<Ellipsoid> kNone;
   const Strip& s = hairstyle_.strips[si];
+  sweep_strip_ = static_cast<int>(si);
   const std::vector<Ellipsoid>& bodies_now =
       bodies_.empty() ? kNone : bodies_now_[static_cast<std::size_t>(margin_of_strip_[si])];
   const std::vector<Ellipsoid>& bodies_before =
