@@ -228,8 +228,7 @@ class Simulator {
   /// at the end), positions_ where the exact step placed it. The partner's strip is read from partner_strip_,
   /// indexed by q like partner_index_ (in order, where strip_of_point_[j] is read at scattered j), and
   /// moved_in_step_ only outside a committed strip. A partner in a strip after the one stepStrip steps
-  /// (sweep_strip_) has no place yet: null without a load at j (at 10,000 strips the exact step's band
-  /// tests after its first flagged place fell from about 260 to 210 TSC cycles a point, 2026-11-28).
+  /// (sweep_strip_) has no place yet: null without the loads at j.
   const Vec3* placedPartner(std::size_t q) const {
     const int strip = partner_strip_[q];
     if (strip > sweep_strip_) return nullptr;
