@@ -12,6 +12,8 @@
       4. The wind bends the hair: mean tip x displacement from the windless start d_wind > 5 mm.
          wind_scale 0: the tips come back (|d| < d_wind / 4) within 6 s; wind_scale 1: bent again.
       5. hinge_stiffness x 10: the steady displacement drops below d_wind / 2 (a stiffer hinge bends less).
+      6. spring_contact_fraction is 0.8 (the config file's and the default); 1.0 is taken and the hair keeps
+         stepping.
       Throughout, HairState.step only grows: a change never resets the simulation.
 
 Private parameters: node (default /hair_sim).
@@ -160,6 +162,14 @@ class LiveTuning(unittest.TestCase):
         d_stiff = self.settle(rest, 8.0)
         rospy.loginfo('%s: hinge_stiffness %.2g -> %.2g: %.4f m', NAME, k, 10 * k, d_stiff)
         self.assertLess(d_stiff, d_wind / 2)
+
+        # 6. The spring band's contact edge: 0.8 at start, a new value taken while the hair runs.
+        self.assertAlmostEqual(self.client.get_configuration(timeout=5.0)['spring_contact_fraction'], 0.8)
+        answer = self.reconfigure(spring_contact_fraction=1.0)
+        self.assertAlmostEqual(answer['spring_contact_fraction'], 1.0)
+        with self.lock:
+            before = self.steps[-1]
+        self.wait_for(lambda: self.steps[-1] > before + 30, 5.0, 'substeps after spring_contact_fraction 1')
 
         with self.lock:
             steps = list(self.steps)

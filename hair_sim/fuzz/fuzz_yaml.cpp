@@ -62,7 +62,8 @@ void checkConfig(const SimConfig& c) {
                     std::isfinite(p.max_angle_step) && std::isfinite(p.max_bend) &&
                     std::isfinite(p.collision_stiffness) && std::isfinite(p.collision_damping) &&
                     std::isfinite(p.spring_stiffness) && std::isfinite(p.spring_proximity_factor) &&
-                    std::isfinite(p.spring_far_factor) && std::isfinite(p.spring_radius),
+                    std::isfinite(p.spring_contact_fraction) && std::isfinite(p.spring_far_factor) &&
+                    std::isfinite(p.spring_radius),
                 "physics");
   try {
     p.validate();

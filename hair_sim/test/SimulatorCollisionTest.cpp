@@ -175,21 +175,20 @@ Hairstyle twoStrips() {
   return two;
 }
 
-TEST(SimulatorCollisionTest, StripsPushedTogetherKeepProximityTimesRestLength) {
-  // Two strips side by side; a wall keeps strip A in place while the wind pushes strip B onto it.
-  PhysicsParameters p = quiet();
-  p.springs_between_strips = true;
-  p.springs_within_strips = true;
-  p.spring_radius = 0.02;
-  const Hairstyle a = twoStrips();
+/// The extremes of the spring pairs' length / rest length while the wind pushes strip B of twoStrips onto
+/// strip A, which a wall keeps in place (4 s).
+struct PushedTogether {
+  double min_between = 1e9, min_within = 1e9, max_within = 0.0;
+};
+PushedTogether pushTogether(const PhysicsParameters& p) {
   const Body wall =
       worldBody("wall", Vec3(0.0, -0.5, -0.05), Vec3(0.5, 0.479, 0.8));  // nearly flat at y = -0.021
-  Simulator sim(a, p, {wall});
-  ASSERT_FALSE(sim.springs().empty());
+  Simulator sim(twoStrips(), p, {wall});
+  EXPECT_FALSE(sim.springs().empty());
   StepInputs in;
   in.wind = Vec3(0.0, -8.0, 0.0);
   in.body_frames = {Iso3::Identity()};
-  double min_between = 1e9, min_within = 1e9, max_within = 0.0;
+  PushedTogether e;
   for (int i = 0; i < 240 * 4; ++i) {
     sim.step(in);
     const std::vector<Vec3>& x = sim.positionsHead();
@@ -197,20 +196,37 @@ TEST(SimulatorCollisionTest, StripsPushedTogetherKeepProximityTimesRestLength) {
       const double ratio =
           (x[static_cast<std::size_t>(s.a)] - x[static_cast<std::size_t>(s.b)]).norm() / s.rest;
       if (s.within_strip) {
-        min_within = std::min(min_within, ratio);
-        max_within = std::max(max_within, ratio);
+        e.min_within = std::min(e.min_within, ratio);
+        e.max_within = std::max(e.max_within, ratio);
       } else {
-        min_between = std::min(min_between, ratio);
+        e.min_between = std::min(e.min_between, ratio);
       }
     }
   }
-  EXPECT_GE(min_between, p.spring_proximity_factor - 1e-9);
-  EXPECT_GE(min_within, p.spring_proximity_factor - 1e-9);
-  // A strip's width stays within the band, also where a point is squeezed between the wall and the
-  // other strip (the band's circle is searched for a point clear of the wall).
-  EXPECT_LE(max_within, p.spring_far_factor + 1e-9);
-  // They were really pushed together (the band's lower edge was reached).
-  EXPECT_LT(min_between, 0.9);
+  return e;
+}
+
+TEST(SimulatorCollisionTest, StripsPushedTogetherKeepTheContactEdge) {
+  // The hard band's near edge is contact_fraction x proximity_factor x rest length (0.6 here); the springs
+  // repel from proximity_factor x rest on.
+  PhysicsParameters p = quiet();
+  p.springs_between_strips = true;
+  p.springs_within_strips = true;
+  p.spring_radius = 0.02;
+  for (const double fraction : {1.0, 0.8, 0.5}) {
+    SCOPED_TRACE("contact_fraction " + std::to_string(fraction));
+    p.spring_contact_fraction = fraction;
+    const double contact = fraction * p.spring_proximity_factor;
+    const PushedTogether e = pushTogether(p);
+    EXPECT_GE(e.min_between, contact - 1e-9);
+    // The 8 m/s wind is stronger than the springs' repulsion: the strips reach the hard edge (0.6, 0.48 and
+    // 0.3 x rest; with an edge still at proximity_factor, 0.8 and 0.5 would stop at 0.6).
+    EXPECT_LE(e.min_between, contact * (1.0 + 1e-4));
+    EXPECT_GE(e.min_within, contact - 1e-9);
+    // A strip's width stays within the band, also where a point is squeezed between the wall and the
+    // other strip (the band's circle is searched for a point clear of the wall).
+    EXPECT_LE(e.max_within, p.spring_far_factor + 1e-9);
+  }
 }
 
 TEST(SimulatorCollisionTest, SpringForceFollowsEquation11OutsideTheBandOnly) {
@@ -417,6 +433,8 @@ TEST(SimulatorCollisionTest, BadBodiesInTheConfigAreNamed) {
       {"center: [-0.01, 0.0, 1.45]", "center: [-0.01, 1.45]", "bodies[1].center", "[-0.01, 1.45]"},
       {"stiffness: 5.0", "stiffness: -5.0", "collision.stiffness", "-5"},
       {"proximity_factor: 0.6", "proximity_factor: 1.6", "springs.proximity_factor", "1.6"},
+      {"contact_fraction: 0.8", "contact_fraction: 0", "springs.contact_fraction", "0"},
+      {"contact_fraction: 0.8", "contact_fraction: .nan", "springs.contact_fraction", "nan"},
   };
   test::expectEditsNamed(good, cases, [](const std::string& path) { loadSimConfig(path); });
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <string>
@@ -810,6 +811,14 @@ TEST(SimulatorTest, SetParametersRejectsBadSetsAndKeepsTheOldOne) {
   p.spring_far_factor = 0.5;
   EXPECT_NE(test::errorOf([&] { sim.setParameters(p); }).find("spring_far_factor"), std::string::npos);
   EXPECT_EQ(sim.parameters().spring_far_factor, 1.5);
+  for (const double bad : {0.0, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    p = sim.parameters();
+    p.spring_contact_fraction = bad;
+    const std::string m = test::errorOf([&] { sim.setParameters(p); });
+    EXPECT_NE(m.find("spring_contact_fraction"), std::string::npos) << m;
+    EXPECT_NE(m.find("must be in [0.01, 1]"), std::string::npos) << m;
+    EXPECT_EQ(sim.parameters().spring_contact_fraction, 0.8);
+  }
   p = sim.parameters();
   p.substep = 1.0 / 120.0;
   EXPECT_NE(test::errorOf([&] { sim.setParameters(p); }).find("substep"), std::string::npos);

@@ -686,8 +686,9 @@ void Simulator::buildSprings() {
 
 void Simulator::buildBandPairs() {
   // Per strip, the spring pairs whose later point in the sweep is in it, neither point a root (roots never
-  // move, so the exact step never keeps such a pair), with the squared band edges (1e-9 relative to spare).
-  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
+  // move, so the exact step never keeps such a pair), with the squared edges of the hard band (the contact
+  // edge and the far edge; 1e-9 relative to spare).
+  const double lo = contactFactor(), hi = params_.spring_far_factor;
   band_pairs_.clear();
   band_pair_start_.assign(hairstyle_.strips.size() + 1, 0);
   auto isRoot = [&](int k) {
@@ -1071,7 +1072,7 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
                                   const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
   auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, !before.empty()); };
   const Vec3 result = clearBodies(pivot, d, dir, now, !before.empty());
-  // Spring band as a constraint: move the end into [proximity, far] x rest length of each partner
+  // Spring band as a constraint: move the end into [contact, far] x rest length of each partner
   // (a few projection sweeps, the length to the pivot kept), if that keeps clear of the bodies.
   const int p_begin = partner_start_[static_cast<std::size_t>(point)];
   const int p_end = partner_start_[static_cast<std::size_t>(point) + 1];
@@ -1301,7 +1302,8 @@ int Simulator::rowBandSide(std::size_t strip, int row) const {
 
 double Simulator::bandTarget(double dist, double signed_rest) const {
   const double rest = std::abs(signed_rest);
-  if (dist < params_.spring_proximity_factor * rest) return params_.spring_proximity_factor * rest * 1.000001;
+  const double contact = contactFactor();
+  if (dist < contact * rest) return contact * rest * 1.000001;
   // A strip's width stays within the band; between strips only the spring force attracts.
   if (signed_rest > 0.0 && dist > params_.spring_far_factor * rest)
     return params_.spring_far_factor * rest * 0.999999;
@@ -1310,7 +1312,7 @@ double Simulator::bandTarget(double dist, double signed_rest) const {
 
 int Simulator::bandSide(double dist, double rest, double far_rest) const {
   if (dist > params_.spring_far_factor * far_rest * (1.0 + 1e-10)) return 1;
-  return dist < params_.spring_proximity_factor * rest ? -1 : 0;
+  return dist < contactFactor() * rest ? -1 : 0;
 }
 
 double Simulator::withinRest(std::size_t i, std::size_t j, double fallback) const {

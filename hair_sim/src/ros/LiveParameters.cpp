@@ -30,6 +30,8 @@ LiveParameters::LiveParameters(ros::NodeHandle private_nh, const LiveSettings& i
   requireInRange("spring_stiffness", start.spring_stiffness, min.spring_stiffness, max.spring_stiffness);
   requireInRange("spring_proximity_factor", start.spring_proximity_factor, min.spring_proximity_factor,
                  max.spring_proximity_factor);
+  requireInRange("spring_contact_fraction", start.spring_contact_fraction, min.spring_contact_fraction,
+                 max.spring_contact_fraction);
   requireInRange("spring_far_factor", start.spring_far_factor, min.spring_far_factor, max.spring_far_factor);
   requireInRange("wind_scale", start.wind_scale, min.wind_scale, max.wind_scale);
   requireInRange("samples_across", start.samples_across, min.samples_across, max.samples_across);
@@ -81,11 +83,12 @@ void LiveParameters::onReconfigure(HairSimConfig& config, std::uint32_t) {
   pending_ = true;
   ROS_INFO(
       "hair_sim: reconfigure: hinge k %g, gamma %g, air drag %g, collision k %g c %g, springs k_s %g "
-      "band [%g, %g], wind x %g, render %s, level of detail %d x %d, max triangles %d",
+      "band [%g, %g] (hard from %g x the near edge), wind x %g, render %s, level of detail %d x %d, max "
+      "triangles %d",
       config.hinge_stiffness, config.hinge_damping, config.air_drag, config.collision_stiffness,
       config.collision_damping, config.spring_stiffness, config.spring_proximity_factor,
-      config.spring_far_factor, config.wind_scale, config.render_mode.c_str(), config.samples_across,
-      config.samples_along, config.max_triangles);
+      config.spring_far_factor, config.spring_contact_fraction, config.wind_scale, config.render_mode.c_str(),
+      config.samples_across, config.samples_along, config.max_triangles);
 }
 
 HairSimConfig LiveParameters::toConfig(const LiveSettings& s) {
@@ -97,6 +100,7 @@ HairSimConfig LiveParameters::toConfig(const LiveSettings& s) {
   c.collision_damping = s.physics.collision_damping;
   c.spring_stiffness = s.physics.spring_stiffness;
   c.spring_proximity_factor = s.physics.spring_proximity_factor;
+  c.spring_contact_fraction = s.physics.spring_contact_fraction;
   c.spring_far_factor = s.physics.spring_far_factor;
   c.wind_scale = s.wind_scale;
   c.render_mode = s.render_mode;
@@ -115,6 +119,7 @@ LiveSettings LiveParameters::fromConfig(const HairSimConfig& c, const LiveSettin
   s.physics.collision_damping = c.collision_damping;
   s.physics.spring_stiffness = c.spring_stiffness;
   s.physics.spring_proximity_factor = c.spring_proximity_factor;
+  s.physics.spring_contact_fraction = c.spring_contact_fraction;
   s.physics.spring_far_factor = c.spring_far_factor;
   s.wind_scale = c.wind_scale;
   s.render_mode = c.render_mode;

@@ -30,11 +30,13 @@
 /// between strips (control points closer than a radius at rest, found through a uniform grid, the
 /// nearest few per point) pull or push along the pair with k_s times the stretch outside the band
 /// [proximity_factor, far_factor] x rest length; their force joins F before the projection (5).
-/// The band is also kept as a constraint on each new end point (bodies take precedence): the later
+/// A hard band [contact, far_factor] x rest length, contact = contact_fraction x proximity_factor (the
+/// repulsion acts first, the constraint is its backstop), is also kept as a constraint on each new end
+/// point (bodies take precedence): the later
 /// point of each pair in the sweep meets it on the circle of its reachable end points, and a strip
 /// whose width still leaves the band gets Gauss-Seidel passes in which every pair is kept from both
 /// ends, then joint placements of whole rows (see relaxStrip), so strips never come closer than
-/// proximity_factor x rest length nor spread wider than far_factor x it, unless the bodies (which keep
+/// contact x rest length nor spread wider than far_factor x it, unless the bodies (which keep
 /// the last word) forbid every placement: in one simulated hour of the soak, 4 substeps, all under a
 /// nod of pi/2 at 20 Hz.
 #include <limits>
@@ -288,7 +290,7 @@ class Simulator {
   /// first_level 1 starts without the swept test.
   Vec3 clearBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
                    bool have_before, int first_level = 0);
-  /// Is some within-strip pair of the strip outside the band [proximity, far] x rest length?
+  /// Is some within-strip pair of the strip outside the hard band [contact, far] x rest length?
   bool stripOutsideBand(std::size_t strip) const;
   /// The same for the pairs of one row of the strip.
   bool rowOutsideBand(std::size_t strip, int row) const;
@@ -296,8 +298,10 @@ class Simulator {
   /// close, 2 both.
   int rowBandSide(std::size_t strip, int row) const;
   /// A within-strip pair at distance dist against the band: 1 farther than far_factor x far_rest (the far
-  /// edge, to 1e-10 relative), -1 closer than proximity_factor x rest, else 0.
+  /// edge, to 1e-10 relative), -1 closer than the contact edge x rest, else 0.
   int bandSide(double dist, double rest, double far_rest) const;
+  /// The hard band's near edge, x rest length: spring_contact_fraction x spring_proximity_factor.
+  double contactFactor() const { return params_.spring_contact_fraction * params_.spring_proximity_factor; }
   /// resolveCollisions' band projection for a partner at distance dist (signed_rest as partner_rest_): the
   /// distance to move the end to (just inside the near edge, or the far edge of a within-strip pair), or 0
   /// when the pair is within its band.

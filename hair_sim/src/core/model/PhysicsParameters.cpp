@@ -30,6 +30,8 @@ void PhysicsParameters::validate() const {
   check(spring_proximity_factor > 0.0 && spring_proximity_factor <= 1.0, "spring_proximity_factor",
         spring_proximity_factor, "must be in (0, 1]");
   check(spring_far_factor >= 1.0, "spring_far_factor", spring_far_factor, "must be >= 1");
+  check(spring_contact_fraction >= 0.01 && spring_contact_fraction <= 1.0, "spring_contact_fraction",
+        spring_contact_fraction, "must be in [0.01, 1]");
   check(spring_radius >= 0.0 && spring_radius <= 0.5, "spring_radius", spring_radius,
         "must be in [0, 0.5] m");
   check(spring_max_pairs >= 0 && spring_max_pairs <= 16, "spring_max_pairs", spring_max_pairs,

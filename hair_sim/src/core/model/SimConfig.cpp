@@ -62,13 +62,14 @@ SimConfig loadSimConfig(const std::string& path) {
   }
   if (y.has("springs")) {
     const YamlReader p = y.child("springs");
-    p.requireKeys({"within_strips", "between_strips", "stiffness", "proximity_factor", "far_factor", "radius",
-                   "max_pairs"});
+    p.requireKeys({"within_strips", "between_strips", "stiffness", "proximity_factor", "contact_fraction",
+                   "far_factor", "radius", "max_pairs"});
     PhysicsParameters& q = c.physics;
     q.springs_within_strips = p.getBool("within_strips", q.springs_within_strips);
     q.springs_between_strips = p.getBool("between_strips", q.springs_between_strips);
     q.spring_stiffness = p.getDouble("stiffness", 0.0, 1e6, q.spring_stiffness);
     q.spring_proximity_factor = p.getDouble("proximity_factor", 1e-3, 1.0, q.spring_proximity_factor);
+    q.spring_contact_fraction = p.getDouble("contact_fraction", 0.01, 1.0, q.spring_contact_fraction);
     q.spring_far_factor = p.getDouble("far_factor", 1.0, 100.0, q.spring_far_factor);
     q.spring_radius = p.getDouble("radius", 0.0, 0.5, q.spring_radius);
     q.spring_max_pairs = p.getInt("max_pairs", 0, 16, q.spring_max_pairs);

@@ -28,8 +28,12 @@ struct PhysicsParameters {
   double spring_stiffness = 0.5;         ///< k_s (N/m)
   double spring_proximity_factor = 0.6;  ///< repulsion when closer than this x rest length
   double spring_far_factor = 1.5;        ///< attraction when further than this x rest length
-  double spring_radius = 0.02;           ///< pairs between strips: rest distance below this (m)
-  int spring_max_pairs = 3;              ///< nearest partners per control point in other strips
+  /// The band's hard near edge as a fraction of spring_proximity_factor: the constraint never places a
+  /// pair's points closer than spring_contact_fraction x spring_proximity_factor x rest length. Below 1 the
+  /// springs' repulsion acts first and the constraint is a backstop (1: both at the repulsion's edge).
+  double spring_contact_fraction = 0.8;
+  double spring_radius = 0.02;  ///< pairs between strips: rest distance below this (m)
+  int spring_max_pairs = 3;     ///< nearest partners per control point in other strips
 
   /// Throws std::invalid_argument "PhysicsParameters: <key>: <value> <problem>" on a bad value.
   void validate() const;
