@@ -32,12 +32,11 @@
 /// [proximity_factor, far_factor] x rest length; their force joins F before the projection (5).
 /// A hard band [contact, far_factor] x rest length, contact = contact_fraction x proximity_factor (the
 /// repulsion acts first, the constraint is its backstop), is also kept as a constraint on each new end
-/// point (bodies take precedence): the later
-/// point of each pair in the sweep meets it on the circle of its reachable end points, and a strip
-/// whose width still leaves the band gets Gauss-Seidel passes in which every pair is kept from both
-/// ends, then joint placements of whole rows (see relaxStrip), so strips never come closer than
-/// contact x rest length nor spread wider than far_factor x it, unless the bodies (which keep
-/// the last word) forbid every placement: in one simulated hour of the soak, 4 substeps, all under a
+/// point (bodies take precedence): the later point of each pair in the sweep meets it on the circle of its
+/// reachable end points, and a strip whose width still leaves the band gets Gauss-Seidel passes in which
+/// every pair is kept from both ends, then joint placements of whole rows (see relaxStrip), so strips never
+/// come closer than contact x rest length nor spread wider than far_factor x it, unless the bodies (which
+/// keep the last word) forbid every placement: in one simulated hour of the soak, 4 substeps, all under a
 /// nod of pi/2 at 20 Hz.
 #include <limits>
 #include <memory>
