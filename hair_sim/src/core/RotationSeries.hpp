@@ -43,5 +43,17 @@ HAIR_SIM_SERIES_INLINE void rotation(T a2, T& cos_a, T& sin_a_over_a, T& one_min
             a2 * (1.0 / 720.0 + a2 * (-1.0 / 40320.0 + a2 * (1.0 / 3628800.0 + a2 * (-1.0 / 479001600.0)))));
 }
 
+/// rotation's first two series alone: cos a and sin(a) / a (a rotation by a vector perpendicular to the
+/// vector it turns needs no (1 - cos a) / a^2).
+template <class T>
+HAIR_SIM_SERIES_INLINE void rotationCosSin(T a2, T& cos_a, T& sin_a_over_a) {
+  cos_a =
+      1.0 + a2 * (-1.0 / 2.0 +
+                  a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0 + a2 * (-1.0 / 3628800.0)))));
+  sin_a_over_a =
+      1.0 + a2 * (-1.0 / 6.0 + a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0 +
+                                                         a2 * (1.0 / 362880.0 + a2 * (-1.0 / 39916800.0)))));
+}
+
 }  // namespace series
 }  // namespace hair_sim

@@ -65,6 +65,15 @@ Vec3 rotateByVector(const Vec3& w, const Vec3& v) {
   return v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c));
 }
 
+Vec3 rotatePerpendicular(const Vec3& w, const Vec3& v) {
+  const double a2 = w.squaredNorm();
+  if (a2 < 1e-24) return v + w.cross(v);
+  if (a2 >= 0.01) return rotateByVector(w, v);
+  double c, sa;
+  series::rotationCosSin(a2, c, sa);
+  return v * c + w.cross(v) * sa;
+}
+
 Mat3 minimalRotation(const Vec3& a, const Vec3& b) {
   const double c = a.dot(b);
   if (c < -1.0 + 1e-9) {
@@ -216,31 +225,36 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
       lanes::LaneBody& lb = lane_bodies_[m * nb + b];
       const Ellipsoid& now = bodies_now_[m][b];
       const Ellipsoid& before = have_bodies_before_ ? bodies_before_[m][b] : now;
-      for (int r = 0; r < 3; ++r) {
-        lb.centre[r] = now.center()[r];
-        lb.centre_before[r] = before.center()[r];
-        for (int c = 0; c < 3; ++c) {
-          lb.sinv[3 * r + c] = now.Sinv()(r, c);
-          lb.sinv_before[3 * r + c] = before.Sinv()(r, c);
-        }
-      }
-      lb.min_radius = now.radii().minCoeff();
       const BodyBound& bound = body_bounds_[m][b];
-      lb.bound_radius = bound.radius;
-      lb.shift = bound.shift;
-      lb.grow = 1.0 + bound.motion;
-      lb.keep2 = (1.0 - bound.motion) * (1.0 - bound.motion);
-      lb.slow = bound.motion < 0.5 ? -1 : 0;
+      for (int l = 0; l < lanes::LaneBody::kCopies; ++l) {
+        for (int r = 0; r < 3; ++r) {
+          lb.centre[r][l] = now.center()[r];
+          lb.centre_before[r][l] = before.center()[r];
+          for (int c = 0; c < 3; ++c) {
+            lb.sinv[3 * r + c][l] = now.Sinv()(r, c);
+            lb.sinv_before[3 * r + c][l] = before.Sinv()(r, c);
+          }
+        }
+        lb.min_radius[l] = now.radii().minCoeff();
+        lb.bound_radius[l] = bound.radius;
+        lb.shift[l] = bound.shift;
+        lb.grow[l] = 1.0 + bound.motion;
+        lb.keep2[l] = (1.0 - bound.motion) * (1.0 - bound.motion);
+        lb.slow[l] = bound.motion < 0.5 ? -1 : 0;
+      }
     }
   std::fill(strip_exact_from_.begin(), strip_exact_from_.end(), kNoExact);
 
   lanes::BlockJob job;
-  job.dt = f.dt, job.rho = f.rho, job.k = f.k, job.gamma = f.gamma, job.drag = f.drag;
+  job.dt = f.dt, job.k = f.k, job.gamma = f.gamma, job.drag = f.drag;
   job.max_angle_step = params_.max_angle_step;
   job.cos_max_bend = f.cos_max_bend;
   for (int r = 0; r < 3; ++r) {
-    job.g[r] = f.g[r], job.acc0[r] = f.acc0[r], job.omega[r] = f.omega[r];
-    job.alpha[r] = f.alpha[r], job.air0[r] = f.air0[r];
+    job.force0[r] = f.force0[r];
+    for (int c = 0; c < 3; ++c) {
+      job.force_mid[3 * r + c] = f.force_mid(r, c);
+      job.force_vel[3 * r + c] = f.force_vel(r, c);
+    }
   }
   job.positions = positions_.data();
   job.direction = direction_.data();
@@ -1521,12 +1535,24 @@ void Simulator::step(const StepInputs& in) {
   f.cos_max_bend = std::cos(params_.max_bend) + 1e-12;
   f.Rt = in.head.pose.linear().transpose();
   // World quantities seen from the head frame.
-  f.g = f.Rt * (in.gravity ? *in.gravity : params_.gravity);
+  const Vec3 g = f.Rt * (in.gravity ? *in.gravity : params_.gravity);
   f.turbulent = in.turbulence && !in.turbulence->empty();
-  f.acc0 = f.Rt * in.head.linear_acceleration;
-  f.omega = f.Rt * in.head.angular_velocity;
-  f.alpha = f.Rt * in.head.angular_acceleration;
-  f.air0 = f.Rt * (in.wind - in.head.linear_velocity);  // air velocity at the head origin, head frame
+  const Vec3 acc0 = f.Rt * in.head.linear_acceleration;
+  const Vec3 omega = f.Rt * in.head.angular_velocity;
+  const Vec3 alpha = f.Rt * in.head.angular_acceleration;
+  const Vec3 air0 =
+      f.Rt * (in.wind - in.head.linear_velocity);  // air velocity at the head origin, head frame
+  // (6) per metre of segment: rho (g + a) + drag (air - v) with the fictitious acceleration of the head frame
+  // a = -a0 - alpha x m - omega x (omega x m) - 2 omega x v and the air air0 - omega x m at the midpoint m.
+  auto crossMatrix = [](const Vec3& w) {
+    Mat3 c;
+    c << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
+    return c;
+  };
+  const Mat3 omega_x = crossMatrix(omega);
+  f.force0 = f.rho * (g - acc0) + f.drag * air0;
+  f.force_mid = -f.rho * (crossMatrix(alpha) + omega_x * omega_x) - f.drag * omega_x;
+  f.force_vel = -2.0 * f.rho * omega_x - f.drag * Mat3::Identity();
   f.k_c = params_.collision_stiffness;
   f.c_c = params_.collision_damping;
   collisions_ = 0;
@@ -1582,12 +1608,23 @@ void Simulator::step(const StepInputs& in) {
   ++steps_;
 }
 
+namespace {
+/// force0 + force_mid m + force_vel v (StepFrame), in the lanes kernel's order of operations.
+Vec3 linearForce(const Vec3& force0, const Mat3& force_mid, const Mat3& force_vel, const Vec3& m,
+                 const Vec3& v) {
+  Vec3 out;
+  for (int r = 0; r < 3; ++r)
+    out[r] = (force0[r] + (force_mid(r, 0) * m.x() + force_mid(r, 1) * m.y() + force_mid(r, 2) * m.z())) +
+             (force_vel(r, 0) * v.x() + force_vel(r, 1) * v.y() + force_vel(r, 2) * v.z());
+  return out;
+}
+}  // namespace
+
 void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset,
                           StepTally& tally, int from, bool from_lanes) {
-  const double dt = f.dt, rho = f.rho, k = f.k, gamma = f.gamma, drag = f.drag;
+  const double dt = f.dt, k = f.k, gamma = f.gamma, drag = f.drag;
   const double cos_max_bend = f.cos_max_bend, k_c = f.k_c, c_c = f.c_c;
   const Mat3& Rt = f.Rt;
-  const Vec3 &g = f.g, &acc0 = f.acc0, &omega = f.omega, &alpha = f.alpha, &air0 = f.air0;
   const bool turbulent = f.turbulent;
   static const std::vector<Ellipsoid> kNone;
   const Strip& s = hairstyle_.strips[si];
@@ -1743,12 +1780,12 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       start_pos_[local] = positions_[i];
       start_dir_[local] = n;
       start_mid_[local] = midAtStart(r, parent, i, d);
-      // (6): F = rho d (g + a) + d f with the fictitious acceleration a of the head frame
-      // (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the hair.
-      const Vec3 a = -acc0 - alpha.cross(mid) - omega.cross(omega.cross(mid)) - 2.0 * omega.cross(v);
-      Vec3 air = air0 - omega.cross(mid);
-      if (turbulent) air += Rt * in.turbulence->at(in.head.pose * mid);
-      Vec3 F = rho * d * (g + a) + d * drag * (air - v) + spring_force_[i];
+      // (6): F = d (rho (g + a) + drag (air - v)) + the springs' force, with the fictitious acceleration a
+      // of the head frame (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the
+      // hair: linear in the midpoint and its velocity (StepFrame::force0, force_mid, force_vel).
+      Vec3 per_metre = linearForce(f.force0, f.force_mid, f.force_vel, mid, v);
+      if (turbulent) per_metre += drag * (Rt * in.turbulence->at(in.head.pose * mid));
+      Vec3 F = d * per_metre + spring_force_[i];
       // (8)-(10): reaction constraint while the control point is inside an inflated body (only a
       // body within the segment's reach can hold it).
       const Vec3 end_now = free_pivot + d * n;
@@ -1764,15 +1801,14 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       Vec3 M = 0.5 * d * n.cross(F);
       // (3): hinge spring toward the rest direction carried by the parent.
       const Vec3 rest = restOf(r, i);
-      M -= k * rotationVectorBetween(rest, n);
-      M -= M.dot(n) * n;
+      M -= k * rotationVectorBetween(rest, n);  // (both terms are perpendicular to n)
       // (7) corrected: I (w^{n+1} - w^n) + gamma dt w^n = dt^2 M; a swing, so without a component
       // along n (twisting a segment about itself does not move it).
       Vec3 w = rate_[i] * (1.0 - gamma * dt * inv_i) + (dt * dt * inv_i) * M;
       w -= w.dot(n) * n;
       const double step_angle = w.norm();
       if (step_angle > params_.max_angle_step) w *= params_.max_angle_step / step_angle;
-      Vec3 next = rotateByVector(w, n).normalized();
+      Vec3 next = rotatePerpendicular(w, n).normalized();
       const Vec3 free_next = next;
       free_dir_[local] = free_next;
       const bool pivot_moved = pivot != free_pivot;

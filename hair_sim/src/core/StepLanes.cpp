@@ -30,11 +30,15 @@ template <>
 struct VecTypes<2> {
   typedef double V __attribute__((vector_size(16)));
   typedef long M __attribute__((vector_size(16)));
+  typedef int I __attribute__((vector_size(8)));            // point indices
+  typedef unsigned char C __attribute__((vector_size(2)));  // flags
 };
 template <>
 struct VecTypes<4> {
   typedef double V __attribute__((vector_size(32)));
   typedef long M __attribute__((vector_size(32)));
+  typedef int I __attribute__((vector_size(16)));
+  typedef unsigned char C __attribute__((vector_size(4)));
 };
 
 template <class V>
@@ -137,6 +141,14 @@ HAIR_SIM_ALWAYS_INLINE V loadLanes(const double* at) {
   __builtin_memcpy(&v, at, sizeof(V));
   return v;
 }
+/// The first lanes of a LaneBody value (stored once per lane): a vector read from memory.
+template <class T, class E>
+HAIR_SIM_ALWAYS_INLINE T lanesOf(const E* at) {
+  static_assert(sizeof(T) <= sizeof(E) * LaneBody::kCopies, "a LaneBody value has kCopies lanes");
+  T v;
+  __builtin_memcpy(&v, at, sizeof(T));
+  return v;
+}
 /// x, y and z of the Vec3s at idx[l] of a, lane by lane; with `pairs` (every lane active, lanes 2m and 2m + 1
 /// reading consecutive points, as the two columns of a strip do) by whole loads and shuffles instead of a
 /// load per value: the same values. (Two consecutive Vec3s are six packed doubles.)
@@ -197,13 +209,11 @@ template <int N, bool have_before>
 HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
   typedef typename VecTypes<N>::V V;
   typedef typename VecTypes<N>::M M;
-  const double dt = job.dt, rho = job.rho, k = job.k, gamma = job.gamma, drag = job.drag;
+  const double dt = job.dt, k = job.k, gamma = job.gamma, drag = job.drag;
   const double max_step = job.max_angle_step, cos_max_bend = job.cos_max_bend;
-  const double gx = job.g[0], gy = job.g[1], gz = job.g[2];
-  const double ax0 = job.acc0[0], ay0 = job.acc0[1], az0 = job.acc0[2];
-  const double ox = job.omega[0], oy = job.omega[1], oz = job.omega[2];
-  const double lx = job.alpha[0], ly = job.alpha[1], lz = job.alpha[2];
-  const double rx0 = job.air0[0], ry0 = job.air0[1], rz0 = job.air0[2];
+  const double* f0 = job.force0;
+  const double* fm = job.force_mid;
+  const double* fv = job.force_vel;
 
   V px, py, pz;  // pivot: the parent's new position
   // The parent's position at the start of the substep: the segment's midpoint then is op + d/2 n, bit for bit
@@ -214,7 +224,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     q5 = splat<V>(0.0), q6 = splat<V>(0.0), q7 = splat<V>(0.0),
     q8 = splat<V>(1.0);  // rotation of the parent from its styled frame
   M flag = M{} & 0;
-  int first_row[N] = {};        // the first row flagged, per lane
+  M first_row = M{} & 0;        // the first row flagged, per lane (0: none yet)
   V max_rate2 = splat<V>(0.0);  // as std::max keeps it (a NaN never enters)
   for (int l = 0; l < N; ++l) {
     const int i0 = job.point[l0 + l];
@@ -226,18 +236,23 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
   for (int r = 1; r < job.rows; ++r) {
     const int* pt = job.point + r * W + l0;
     V nx, ny, nz, vx, vy, vz, wx, wy, wz, fx, fy, fz, ux, uy, uz, sx, sy, sz, mx, my, mz, ex, ey, ez, d, ii;
-    M active;
-    int active_count = 0;
-    int idx[N];  // an idle lane reads point 0 (any point) and takes the idle values below instead
-    for (int l = 0; l < N; ++l) {
-      active[l] = pt[l] >= 0 ? -1 : 0;
-      active_count += pt[l] >= 0 ? 1 : 0;
-      idx[l] = pt[l] >= 0 ? pt[l] : 0;
-    }
-    if (active_count == 0) break;
-    const bool all_active = active_count == N;
+    // The lanes with a point in this row (from the row's N point indices in one vector).
+    typedef typename VecTypes<N>::I I;
+    I row_points;
+    __builtin_memcpy(&row_points, pt, sizeof(I));
+    const M active = __builtin_convertvector(row_points >= 0, M);
+    if (!anyLane(active)) break;
+    const bool all_active = !anyLane(~active);
     bool pairs = all_active;
     for (int l = 0; l < N; l += 2) pairs = pairs && pt[l + 1] == pt[l] + 1;
+    // The points to read: with pairs, pt itself (loadVec3 reads lanes 0 and 2); else lane by lane, an idle
+    // lane reading point 0 (any point) and taking the idle values below instead.
+    int idle_safe[N];
+    const int* idx = pt;
+    if (!pairs) {
+      for (int l = 0; l < N; ++l) idle_safe[l] = pt[l] >= 0 ? pt[l] : 0;
+      idx = idle_safe;
+    }
     loadVec3<N>(job.direction, idx, pairs, nx, ny, nz);
     loadVec3<N>(job.velocity, idx, pairs, vx, vy, vz);
     loadVec3<N>(job.rate, idx, pairs, wx, wy, wz);
@@ -260,30 +275,24 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       ex = sel(active, ex, px), ey = sel(active, ey, py), ez = sel(active, ez, pz + 1.0);
     }
 
-    // Segment midpoints; the turbulence is evaluated there (world points), lane by lane.
+    // (6) the force at the segment's midpoint c (the new pivot, the old direction) with its velocity v:
+    // d (force0 + force_mid c + force_vel v + drag turbulence(c)) + the springs' force
+    // (Simulator::StepFrame).
     const V cx = px + hd * nx, cy = py + hd * ny, cz = pz + hd * nz;
-    V tx = splat<V>(0.0), ty = splat<V>(0.0), tz = splat<V>(0.0);
-    if (job.turbulence)
+    V Fx = (f0[0] + (fm[0] * cx + fm[1] * cy + fm[2] * cz)) + (fv[0] * vx + fv[1] * vy + fv[2] * vz);
+    V Fy = (f0[1] + (fm[3] * cx + fm[4] * cy + fm[5] * cz)) + (fv[3] * vx + fv[4] * vy + fv[5] * vz);
+    V Fz = (f0[2] + (fm[6] * cx + fm[7] * cy + fm[8] * cz)) + (fv[6] * vx + fv[7] * vy + fv[8] * vz);
+    if (job.turbulence) {  // at world points, lane by lane
+      V tx = splat<V>(0.0), ty = splat<V>(0.0), tz = splat<V>(0.0);
       for (int l = 0; l < N; ++l) {
         if (pt[l] < 0) continue;
         const Vec3 t =
             *job.head_rotation_inverse * job.turbulence->at(*job.head_pose * Vec3(cx[l], cy[l], cz[l]));
         tx[l] = t.x(), ty[l] = t.y(), tz[l] = t.z();
       }
-
-    // (6) force: alpha x mid, omega x mid, omega x (omega x mid), omega x v.
-    const V amx = ly * cz - lz * cy, amy = lz * cx - lx * cz, amz = lx * cy - ly * cx;
-    const V omx = oy * cz - oz * cy, omy = oz * cx - ox * cz, omz = ox * cy - oy * cx;
-    const V oomx = oy * omz - oz * omy, oomy = oz * omx - ox * omz, oomz = ox * omy - oy * omx;
-    const V ovx = oy * vz - oz * vy, ovy = oz * vx - ox * vz, ovz = ox * vy - oy * vx;
-    const V acx = -ax0 - amx - oomx - 2.0 * ovx;
-    const V acy = -ay0 - amy - oomy - 2.0 * ovy;
-    const V acz = -az0 - amz - oomz - 2.0 * ovz;
-    const V airx = (rx0 - omx) + tx, airy = (ry0 - omy) + ty, airz = (rz0 - omz) + tz;
-    const V rd = rho * d, dd = d * drag;
-    const V Fx = rd * (gx + acx) + dd * (airx - vx) + fx;
-    const V Fy = rd * (gy + acy) + dd * (airy - vy) + fy;
-    const V Fz = rd * (gz + acz) + dd * (airz - vz) + fz;
+      Fx = Fx + drag * tx, Fy = Fy + drag * ty, Fz = Fz + drag * tz;
+    }
+    Fx = d * Fx + fx, Fy = d * Fy + fy, Fz = d * Fz + fz;
     // (4)-(5) its moment at the lever d/2.
     V Mx = hd * (ny * Fz - nz * Fy);
     V My = hd * (nz * Fx - nx * Fz);
@@ -319,38 +328,36 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
         }
 
     // (7): the new rate w (without a part along n, limited to max_angle_step) and the new direction,
-    // rotateByVector(w, n) by its series for the small turns (the other lanes by the scalar function).
-    Mx = Mx - k * hx, My = My - k * hy, Mz = Mz - k * hz;
-    const V mn = Mx * nx + My * ny + Mz * nz;
-    Mx = Mx - mn * nx, My = My - mn * ny, Mz = Mz - mn * nz;
+    // rotatePerpendicular(w, n) by its series for the small turns (the other lanes by the scalar function).
+    Mx = Mx - k * hx, My = My - k * hy, Mz = Mz - k * hz;  // (both terms are perpendicular to n)
     const V keep = 1.0 - gamma * dt * ii, push = (dt * dt) * ii;
     V Wx = wx * keep + push * Mx, Wy = wy * keep + push * My, Wz = wz * keep + push * Mz;
     const V wn = Wx * nx + Wy * ny + Wz * nz;
     Wx = Wx - wn * nx, Wy = Wy - wn * ny, Wz = Wz - wn * nz;
-    const V step_angle = vsqrt(Wx * Wx + Wy * Wy + Wz * Wz);
+    const V ww = Wx * Wx + Wy * Wy + Wz * Wz;
+    const V step_angle = vsqrt(ww);
     const M over = step_angle > max_step;
+    V a2 = ww;            // |w|^2 of the new rate
     if (anyLane(over)) {  // (the division only when some lane is over the limit)
       const V limit = max_step / sel(over, step_angle, splat<V>(1.0));
       Wx = sel(over, Wx * limit, Wx), Wy = sel(over, Wy * limit, Wy), Wz = sel(over, Wz * limit, Wz);
+      a2 = sel(over, Wx * Wx + Wy * Wy + Wz * Wz, ww);
     }
-    const V a2 = Wx * Wx + Wy * Wy + Wz * Wz;
     max_rate2 = sel(active & (max_rate2 < a2), a2, max_rate2);
     const M small = a2 < 0.01;
     const M tiny = a2 < 1e-24;
     const V crx = Wy * nz - Wz * ny, cry = Wz * nx - Wx * nz, crz = Wx * ny - Wy * nx;
-    V co, sa, ca;
-    series::rotation(a2, co, sa, ca);
-    const V wv = (Wx * nx + Wy * ny + Wz * nz) * ca;
-    V bx = (nx * co + crx * sa) + Wx * wv;
-    V by = (ny * co + cry * sa) + Wy * wv;
-    V bz = (nz * co + crz * sa) + Wz * wv;
+    V co, sa;
+    series::rotationCosSin(a2, co, sa);
+    V bx = nx * co + crx * sa, by = ny * co + cry * sa, bz = nz * co + crz * sa;
     bx = sel(tiny, nx + crx, bx), by = sel(tiny, ny + cry, by), bz = sel(tiny, nz + crz, bz);
     const V len = vsqrt(bx * bx + by * by + bz * bz);
     V kx = bx / len, ky = by / len, kz = bz / len;
     if (anyLane(~small))
       for (int l = 0; l < N; ++l)
         if (!small[l]) {
-          const Vec3 next = rotateByVector(Vec3(Wx[l], Wy[l], Wz[l]), Vec3(nx[l], ny[l], nz[l])).normalized();
+          const Vec3 next =
+              rotatePerpendicular(Vec3(Wx[l], Wy[l], Wz[l]), Vec3(nx[l], ny[l], nz[l])).normalized();
           kx[l] = next.x(), ky[l] = next.y(), kz[l] = next.z();
         }
 
@@ -394,52 +401,59 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     }
     for (int b = 0; b < job.body_count; ++b) {
       const LaneBody& B = job.bodies[b];
-      const V dx = px - B.centre[0], dy = py - B.centre[1], dz = pz - B.centre[2];
+      const V dx = px - lanesOf<V>(B.centre[0]), dy = py - lanesOf<V>(B.centre[1]),
+              dz = pz - lanesOf<V>(B.centre[2]);
       const V dist2 = dx * dx + dy * dy + dz * dz;
-      const V rch = B.bound_radius + d;
+      const V rch = lanesOf<V>(B.bound_radius) + d;
       M far = dist2 > rch * rch;
       if (have_before) {
-        const V lim = B.bound_radius + (reach_prev + B.shift) * B.grow;
-        far = far & (dist2 * B.keep2 > lim * lim) & B.slow;
+        const V lim = lanesOf<V>(B.bound_radius) + (reach_prev + lanesOf<V>(B.shift)) * lanesOf<V>(B.grow);
+        far = far & (dist2 * lanesOf<V>(B.keep2) > lim * lim) & lanesOf<M>(B.slow);
       }
       const M reach = ~far & active;
       if (!anyLane(reach)) continue;
-      const double* S = B.sinv;
-      const double* Sb = B.sinv_before;
-      const V qx = S[0] * dx + S[1] * dy + S[2] * dz;
-      const V qy = S[3] * dx + S[4] * dy + S[5] * dz;
-      const V qz = S[6] * dx + S[7] * dy + S[8] * dz;
+      const double(*S)[LaneBody::kCopies] = B.sinv;
+      const double(*Sb)[LaneBody::kCopies] = B.sinv_before;
+      const V qx = lanesOf<V>(S[0]) * dx + lanesOf<V>(S[1]) * dy + lanesOf<V>(S[2]) * dz;
+      const V qy = lanesOf<V>(S[3]) * dx + lanesOf<V>(S[4]) * dy + lanesOf<V>(S[5]) * dz;
+      const V qz = lanesOf<V>(S[6]) * dx + lanesOf<V>(S[7]) * dy + lanesOf<V>(S[8]) * dz;
       const V n2 = qx * qx + qy * qy + qz * qz;
       const M pivot_inside = n2 < 1.0;
-      const V lim = 1.0 + d / B.min_radius + 1e-9;
+      const V lim = 1.0 + d / lanesOf<V>(B.min_radius) + 1e-9;
       M far2 = n2 > lim * lim;
       V bx1 = splat<V>(0.0), by1 = splat<V>(0.0), bz1 = splat<V>(0.0);
       if (have_before) {
-        const V ddx = ex - B.centre_before[0], ddy = ey - B.centre_before[1], ddz = ez - B.centre_before[2];
-        bx1 = Sb[0] * ddx + Sb[1] * ddy + Sb[2] * ddz;
-        by1 = Sb[3] * ddx + Sb[4] * ddy + Sb[5] * ddz;
-        bz1 = Sb[6] * ddx + Sb[7] * ddy + Sb[8] * ddz;
+        const V ddx = ex - lanesOf<V>(B.centre_before[0]), ddy = ey - lanesOf<V>(B.centre_before[1]),
+                ddz = ez - lanesOf<V>(B.centre_before[2]);
+        bx1 = lanesOf<V>(Sb[0]) * ddx + lanesOf<V>(Sb[1]) * ddy + lanesOf<V>(Sb[2]) * ddz;
+        by1 = lanesOf<V>(Sb[3]) * ddx + lanesOf<V>(Sb[4]) * ddy + lanesOf<V>(Sb[5]) * ddz;
+        bz1 = lanesOf<V>(Sb[6]) * ddx + lanesOf<V>(Sb[7]) * ddy + lanesOf<V>(Sb[8]) * ddz;
         const V spare = vsqrt(n2) - 1.0 - 1e-9;
         const V gx1 = bx1 - qx, gy1 = by1 - qy, gz1 = bz1 - qz;
         far2 = far2 & (gx1 * gx1 + gy1 * gy1 + gz1 * gz1 < spare * spare);
       }
       // The end now (reaction constraint while inside) and the new end, in sphere space.
-      const V snx = S[0] * nx + S[1] * ny + S[2] * nz;
-      const V sny = S[3] * nx + S[4] * ny + S[5] * nz;
-      const V snz = S[6] * nx + S[7] * ny + S[8] * nz;
+      const V snx = lanesOf<V>(S[0]) * nx + lanesOf<V>(S[1]) * ny + lanesOf<V>(S[2]) * nz;
+      const V sny = lanesOf<V>(S[3]) * nx + lanesOf<V>(S[4]) * ny + lanesOf<V>(S[5]) * nz;
+      const V snz = lanesOf<V>(S[6]) * nx + lanesOf<V>(S[7]) * ny + lanesOf<V>(S[8]) * nz;
       const V cx1 = qx + d * snx, cy1 = qy + d * sny, cz1 = qz + d * snz;
       const M inside_now = cx1 * cx1 + cy1 * cy1 + cz1 * cz1 < 1.0;
-      const V skx = S[0] * kx + S[1] * ky + S[2] * kz;
-      const V sky = S[3] * kx + S[4] * ky + S[5] * kz;
-      const V skz = S[6] * kx + S[7] * ky + S[8] * kz;
+      const V skx = lanesOf<V>(S[0]) * kx + lanesOf<V>(S[1]) * ky + lanesOf<V>(S[2]) * kz;
+      const V sky = lanesOf<V>(S[3]) * kx + lanesOf<V>(S[4]) * ky + lanesOf<V>(S[5]) * kz;
+      const V skz = lanesOf<V>(S[6]) * kx + lanesOf<V>(S[7]) * ky + lanesOf<V>(S[8]) * kz;
       const V qex = qx + d * skx, qey = qy + d * sky, qez = qz + d * skz;
       const M end_in = (qex * qex + qey * qey + qez * qez) - 1.0 <= 1e-12;
-      const M cuts = ~pivot_inside & pathEnters(qx, qy, qz, qex, qey, qez);
-      M swept = M{} & 0;
-      if (have_before) swept = ~pivot_inside & pathEnters(bx1, by1, bz1, qex, qey, qez);
       const M acting = reach & ~far2;
       full = full | (acting & inside_now);
-      hit = hit | (acting & (end_in | cuts | swept));
+      // The segment and the end's path only for the lanes they can still flag: not already flagged (by this
+      // body's end or an earlier body), with the pivot outside (a pivot inside takes the end's test alone).
+      const M open = acting & ~end_in & ~hit & ~full & ~pivot_inside;
+      hit = hit | (acting & end_in);
+      if (anyLane(open)) {
+        M path = pathEnters(qx, qy, qz, qex, qey, qez);
+        if (have_before) path = path | pathEnters(bx1, by1, bz1, qex, qey, qez);
+        hit = hit | (open & path);
+      }
     }
     flag = flag | full | hit | bent;
 
@@ -451,15 +465,21 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     storeVec3<N>(job.out_rate, pt, pairs, Wx, Wy, Wz);
     storeVec3<N>(job.out_position, pt, pairs, nex, ney, nez);
     storeVec3<N>(job.out_velocity, pt, pairs, velx, vely, velz);
-    for (int l = 0; l < N; ++l)
-      if (pt[l] >= 0) job.out_flag[pt[l]] = static_cast<unsigned char>(code[l]);
+    typedef typename VecTypes<N>::C C;
+    const C code_bytes = __builtin_convertvector(code, C);
+    if (pairs) {  // lanes 2m and 2m + 1 at consecutive points
+      for (int l = 0; l < N; l += 2)
+        __builtin_memcpy(job.out_flag + pt[l], reinterpret_cast<const unsigned char*>(&code_bytes) + l, 2);
+    } else {
+      for (int l = 0; l < N; ++l)
+        if (pt[l] >= 0) job.out_flag[pt[l]] = code_bytes[l];
+    }
     px = nex, py = ney, pz = nez;
     opx = ex, opy = ey, opz = ez;
-    for (int l = 0; l < N; ++l)
-      if (flag[l] && first_row[l] == 0) first_row[l] = r;
+    first_row = sel(flag & (first_row == 0), M{} + r, first_row);
   }
   for (int l = 0; l < N; ++l) {
-    job.first_flagged_row[l0 + l] = first_row[l];
+    job.first_flagged_row[l0 + l] = static_cast<int>(first_row[l]);
     job.max_rate2[l0 + l] = max_rate2[l];
   }
 }

@@ -32,8 +32,9 @@ constexpr unsigned char kPointBodies = 1;
 /// One block of kLanes chains. Arrays of Vec3 are the Simulator's per-point arrays (head frame).
 struct BlockJob {
   // Constants of the substep (head frame).
-  double dt, rho, k, gamma, drag, max_angle_step, cos_max_bend;
-  double g[3], acc0[3], omega[3], alpha[3], air0[3];
+  double dt, k, gamma, drag, max_angle_step, cos_max_bend;
+  /// Simulator::StepFrame's force0, force_mid and force_vel (row-major).
+  double force0[3], force_mid[9], force_vel[9];
   /// Rows of the longest chain in the block (>= 2).
   int rows = 0;
   /// [rows][kLanes]: control point of each row of each lane (row 0: the root), -1 past a chain's end or for

@@ -54,20 +54,22 @@ class LaneWorkers;
 
 namespace lanes {
 /// Internal to step()'s vectorised path: one body inflated by a strip's margin, in the head frame, now and
-/// at the previous substep, as flat arrays.
+/// at the previous substep, as flat arrays. Each value is stored once per lane of a block (4), so that the
+/// lanes kernel reads it as a whole vector, an operand in memory, instead of broadcasting it each time.
 struct LaneBody {
-  double centre[3];
-  double sinv[9];  ///< S^-1, row-major
-  double min_radius;
-  double centre_before[3];
-  double sinv_before[9];
-  double bound_radius;  ///< ball about the centre that holds the body (see Simulator::BodyBound)
-  double shift;
+  static constexpr int kCopies = 4;  ///< lanes::kLanes
+  double centre[3][kCopies];
+  double sinv[9][kCopies];  ///< S^-1, row-major
+  double min_radius[kCopies];
+  double centre_before[3][kCopies];
+  double sinv_before[9][kCopies];
+  double bound_radius[kCopies];  ///< ball about the centre that holds the body (see Simulator::BodyBound)
+  double shift[kCopies];
   // Of the body's motion (Simulator::BodyBound), for the quick reject: 1 + motion, (1 - motion)^2, and
   // whether motion < 0.5 (-1 or 0).
-  double grow;
-  double keep2;
-  long slow;
+  double grow[kCopies];
+  double keep2[kCopies];
+  long slow[kCopies];
 };
 }  // namespace lanes
 
@@ -191,7 +193,13 @@ class Simulator {
   struct StepFrame {
     double dt, rho, k, gamma, drag, cos_max_bend, k_c, c_c;
     Mat3 Rt;
-    Vec3 g, acc0, omega, alpha, air0;
+    /// The force (6) on a segment per metre of its length, linear in its midpoint m and the midpoint's
+    /// velocity v (head frame): F / d = force0 + force_mid m + force_vel v (+ drag x turbulence), with
+    /// force0 = rho (g - a0) + drag air0, force_mid = -rho ([alpha]x + [omega]x^2) - drag [omega]x and
+    /// force_vel = -2 rho [omega]x - drag I: gravity, the head frame's linear, angular, centrifugal and
+    /// Coriolis accelerations, and the drag of the air (air0 at the head origin) relative to the hair.
+    Vec3 force0;
+    Mat3 force_mid, force_vel;
     bool turbulent;
   };
   /// What a substep measured.
@@ -453,6 +461,10 @@ class Simulator {
 Vec3 rotationVectorBetween(const Vec3& a, const Vec3& b);
 /// Rotates v by the rotation vector w (Rodrigues).
 Vec3 rotateByVector(const Vec3& w, const Vec3& v);
+/// rotateByVector for w perpendicular to v (w . v = 0 within rounding, as a swing of a segment about its
+/// pivot is): for the small turns (|w| < 0.1) without the term w (w . v) (1 - cos |w|) / |w|^2, which then
+/// vanishes.
+Vec3 rotatePerpendicular(const Vec3& w, const Vec3& v);
 /// Smallest rotation taking unit a onto unit b (a deterministic 180 degree turn when opposite).
 Mat3 minimalRotation(const Vec3& a, const Vec3& b);
 
