@@ -68,18 +68,19 @@ HAIR_SIM_ALWAYS_INLINE bool anyLane(M m) {
   }
 }
 
-/// atan2(s, c) for s >= 0, in [0, pi], within an ulp or two of std::atan2: atan of the ratio by the Cephes
-/// library's reduction (to |x| <= 0.66) and rational approximation; plain arithmetic, so every lane and
-/// both instruction sets give the same bits.
+/// atan2(s, c) / s for s > 0: the hinge's angle over its sine, within an ulp or two of std::atan2(s, c) / s.
+/// The Cephes library's atan on the ratio reduced to |x| <= 0.66 (x = s / |c|; -|c| / s above tan(3 pi / 8),
+/// (s - |c|) / (s + |c|) above 0.66: one division for all three) and its rational approximation; plain
+/// arithmetic, so every lane and every instruction set give the same bits. Three divisions, no series
+/// beside it.
 template <class V>
-HAIR_SIM_ALWAYS_INLINE V vatan2(V s, V c) {
+HAIR_SIM_ALWAYS_INLINE V vatan2OverS(V s, V c) {
   typedef decltype(V{} < V{}) M;
   const V ac = sel(c < 0.0, -c, c);
-  const V x = s / sel(ac > 0.0, ac, splat<V>(1e-300));
-  const M big = x > 2.414213562373095;  // tan(3 pi / 8)
-  const M mid = ~big & (x > 0.66);
+  const M big = s > 2.414213562373095 * ac;  // tan(3 pi / 8)
+  const M mid = ~big & (s > 0.66 * ac);
   const double kMoreBits = 6.123233995736765886130e-17;
-  const V xr = sel(big, -1.0 / sel(big, x, splat<V>(1.0)), sel(mid, (x - 1.0) / (x + 1.0), x));
+  const V xr = sel(big, -ac, sel(mid, s - ac, s)) / sel(big, s, sel(mid, s + ac, ac));
   const V y0 = sel(big, splat<V>(1.5707963267948966), sel(mid, splat<V>(0.7853981633974483), splat<V>(0.0)));
   const V more = sel(big, splat<V>(kMoreBits), sel(mid, splat<V>(0.5 * kMoreBits), splat<V>(0.0)));
   const V z = xr * xr;
@@ -95,7 +96,7 @@ HAIR_SIM_ALWAYS_INLINE V vatan2(V s, V c) {
           z +
       1.945506571482613964425e2;
   const V a = y0 + (more + (xr * (z * pp / qq) + xr));
-  return sel(c < 0.0, 3.141592653589793 - a, a);
+  return sel(c < 0.0, 3.141592653589793 - a, a) / s;
 }
 
 /// Does the straight path q0 -> q1 (sphere space) enter the unit sphere from outside? (Lane form of the
@@ -297,28 +298,20 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     V Mx = hd * (ny * Fz - nz * Fy);
     V My = hd * (nz * Fx - nx * Fz);
     V Mz = hd * (nx * Fy - ny * Fx);
-    // (3) the hinge: rest direction carried by the parent, rotationVectorBetween(rest, n) by its small-angle
-    // series (the lanes outside it by the scalar function).
+    // (3) the hinge: rest direction carried by the parent, rotationVectorBetween(rest, n) in lanes (the lanes
+    // of opposite directions by the scalar function).
     const V restx = q0 * ux + q1 * uy + q2 * uz;
     const V resty = q3 * ux + q4 * uy + q5 * uz;
     const V restz = q6 * ux + q7 * uy + q8 * uz;
     const V axx = resty * nz - restz * ny, axy = restz * nx - restx * nz, axz = restx * ny - resty * nx;
     const V c = restx * nx + resty * ny + restz * nz;
     const V s2 = axx * axx + axy * axy + axz * axz;
-    const V c2 = c * c;
-    const M series = (c > 0.0) & (s2 > 1e-24) & (s2 < 0.01 * c2);
-    const V x2 = s2 / sel(c2 > 0.0, c2, splat<V>(1.0));
-    const V p = series::atanOverX(x2);
-    // Outside the series: angle = atan2(s, c) by vatan2 (s > 1e-12); a zero rotation for s <= 1e-12, c > 0;
+    // The angle atan2(s, c) over s by vatan2OverS (s > 1e-12); a zero rotation for s <= 1e-12, c > 0;
     // opposite directions (s <= 1e-12, c <= 0) by the scalar function.
     const V sn = vsqrt(s2);
     const M has_axis = sn > 1e-12;
-    // vatan2 and its division by sn (five divisions) only when some lane takes them: nearly every hinge is
-    // within the series.
-    V by_atan = splat<V>(0.0);
-    if (anyLane(~series & has_axis)) by_atan = vatan2(sn, c) / sel(has_axis, sn, splat<V>(1.0));
-    const V scale = sel(series, p / sel(c != 0.0, c, splat<V>(1.0)), sel(has_axis, by_atan, splat<V>(0.0)));
-    const M opposite = ~series & ~has_axis & ~(c > 0.0);
+    const V scale = sel(has_axis, vatan2OverS(sel(has_axis, sn, splat<V>(1.0)), c), splat<V>(0.0));
+    const M opposite = ~has_axis & ~(c > 0.0);
     V hx = axx * scale, hy = axy * scale, hz = axz * scale;
     if (anyLane(opposite))
       for (int l = 0; l < N; ++l)
@@ -394,21 +387,27 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
     // Bodies: the quick reject of Simulator::prepareBodies, then for the bodies within reach its exact
     // tests: the end inside now (reaction constraint), or the new segment / the end's path over the
     // substep not clear of the body (Simulator::clearOf): the exact step decides.
-    V reach_prev = splat<V>(0.0);
+    // With the body's last place: the reach of the segment and of the end's path, max(|prev end - pivot|, d).
+    // Then one test is stronger than both of prepareBodies' (D > R + d, and D (1 - motion) > R + (|prev end
+    // - pivot| + shift)(1 + motion)): a body it rejects, they reject too, so the flags are the same.
+    V reach = d;
     if (have_before) {
       const V gx1 = ex - px, gy1 = ey - py, gz1 = ez - pz;
-      reach_prev = vsqrt(gx1 * gx1 + gy1 * gy1 + gz1 * gz1);
+      const V reach_prev = vsqrt(gx1 * gx1 + gy1 * gy1 + gz1 * gz1);
+      reach = sel(reach_prev > d, reach_prev, d);
     }
     for (int b = 0; b < job.body_count; ++b) {
       const LaneBody& B = job.bodies[b];
       const V dx = px - lanesOf<V>(B.centre[0]), dy = py - lanesOf<V>(B.centre[1]),
               dz = pz - lanesOf<V>(B.centre[2]);
       const V dist2 = dx * dx + dy * dy + dz * dz;
-      const V rch = lanesOf<V>(B.bound_radius) + d;
-      M far = dist2 > rch * rch;
+      M far;
       if (have_before) {
-        const V lim = lanesOf<V>(B.bound_radius) + (reach_prev + lanesOf<V>(B.shift)) * lanesOf<V>(B.grow);
-        far = far & (dist2 * lanesOf<V>(B.keep2) > lim * lim) & lanesOf<M>(B.slow);
+        const V lim = lanesOf<V>(B.bound_radius) + (reach + lanesOf<V>(B.shift)) * lanesOf<V>(B.grow);
+        far = (dist2 * lanesOf<V>(B.keep2) > lim * lim) & lanesOf<M>(B.slow);
+      } else {
+        const V rch = lanesOf<V>(B.bound_radius) + d;
+        far = dist2 > rch * rch;
       }
       const M reach = ~far & active;
       if (!anyLane(reach)) continue;
