@@ -1244,14 +1244,16 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
     }
     return hi;
   };
-  // Candidate escape directions: the outward normal at the pivot's nearest point of each violated
-  // body (pivot + d N clears a convex body) and their mean (a crevice between two bodies).
+  // Candidate escape directions: for each violated body, the outward normal of its level set through the
+  // pivot (the implicit function's gradient: the body's implicit value grows along the whole ray from a pivot
+  // outside, so pivot + d N clears a convex body), or from a pivot inside the normal at its nearest surface
+  // point; and their mean (a crevice between two bodies).
   Vec3 cand[8];
   int count = 0;
   Vec3 sum = Vec3::Zero();
   for (std::size_t b = 0; b < nb && count < 7; ++b) {
     if (validFor(b, dir)) continue;
-    cand[count] = now[b].closestPoint(pivot).normal;
+    cand[count] = pivot_inside_[b] ? now[b].closestPoint(pivot).normal : now[b].normalAt(pivot);
     sum += cand[count++];
   }
   if (count == 0) return dir;
