@@ -27,24 +27,8 @@ HAIR_SIM_SERIES_INLINE T atanOverX(T x2) {
   return p;
 }
 
-/// For a rotation by the angle a, a2 = a^2 < 0.01: cos a, sin(a) / a and (1 - cos a) / a^2, to a^10 (the
-/// terms left out are below 2e-21; no cancellation in 1 - cos).
-template <class T>
-HAIR_SIM_SERIES_INLINE void rotation(T a2, T& cos_a, T& sin_a_over_a, T& one_minus_cos_over_a2) {
-  cos_a =
-      1.0 + a2 * (-1.0 / 2.0 +
-                  a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40320.0 + a2 * (-1.0 / 3628800.0)))));
-  sin_a_over_a =
-      1.0 + a2 * (-1.0 / 6.0 + a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0 +
-                                                         a2 * (1.0 / 362880.0 + a2 * (-1.0 / 39916800.0)))));
-  one_minus_cos_over_a2 =
-      0.5 +
-      a2 * (-1.0 / 24.0 +
-            a2 * (1.0 / 720.0 + a2 * (-1.0 / 40320.0 + a2 * (1.0 / 3628800.0 + a2 * (-1.0 / 479001600.0)))));
-}
-
-/// rotation's first two series alone: cos a and sin(a) / a (a rotation by a vector perpendicular to the
-/// vector it turns needs no (1 - cos a) / a^2).
+/// For a rotation by the angle a, a2 = a^2 < 0.01: cos a and sin(a) / a, to a^10 (the terms left out are
+/// below 2e-21). A rotation by a vector perpendicular to the vector it turns needs no more.
 template <class T>
 HAIR_SIM_SERIES_INLINE void rotationCosSin(T a2, T& cos_a, T& sin_a_over_a) {
   cos_a =
@@ -53,6 +37,16 @@ HAIR_SIM_SERIES_INLINE void rotationCosSin(T a2, T& cos_a, T& sin_a_over_a) {
   sin_a_over_a =
       1.0 + a2 * (-1.0 / 6.0 + a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0 +
                                                          a2 * (1.0 / 362880.0 + a2 * (-1.0 / 39916800.0)))));
+}
+
+/// rotationCosSin and (1 - cos a) / a^2, to a^10 (no cancellation in 1 - cos).
+template <class T>
+HAIR_SIM_SERIES_INLINE void rotation(T a2, T& cos_a, T& sin_a_over_a, T& one_minus_cos_over_a2) {
+  rotationCosSin(a2, cos_a, sin_a_over_a);
+  one_minus_cos_over_a2 =
+      0.5 +
+      a2 * (-1.0 / 24.0 +
+            a2 * (1.0 / 720.0 + a2 * (-1.0 / 40320.0 + a2 * (1.0 / 3628800.0 + a2 * (-1.0 / 479001600.0)))));
 }
 
 }  // namespace series
