@@ -235,7 +235,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
             lb.sinv_before[3 * r + c][l] = before.Sinv()(r, c);
           }
         }
-        lb.min_radius[l] = now.radii().minCoeff();
         lb.bound_radius[l] = bound.radius;
         lb.shift[l] = bound.shift;
         lb.grow[l] = 1.0 + bound.motion;

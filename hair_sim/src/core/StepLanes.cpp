@@ -418,8 +418,10 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       const V qz = lanesOf<V>(S[6]) * dx + lanesOf<V>(S[7]) * dy + lanesOf<V>(S[8]) * dz;
       const V n2 = qx * qx + qy * qy + qz * qz;
       const M pivot_inside = n2 < 1.0;
-      const V lim = 1.0 + d / lanesOf<V>(B.min_radius) + 1e-9;
-      M far2 = n2 > lim * lim;
+      // (No sphere-space bound before the exact tests: where prepareBodies' bound -- |q| > 1 + d / smallest
+      // radius + 1e-9 and the previous end within |q| - 1 - 1e-9 of q -- rejects a lane, the end now, the new
+      // end, the segment and the end's path all lie in a ball about q outside the unit sphere, so the tests
+      // below find nothing there either: the same flags.)
       V bx1 = splat<V>(0.0), by1 = splat<V>(0.0), bz1 = splat<V>(0.0);
       if (have_before) {
         const V ddx = ex - lanesOf<V>(B.centre_before[0]), ddy = ey - lanesOf<V>(B.centre_before[1]),
@@ -427,9 +429,6 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
         bx1 = lanesOf<V>(Sb[0]) * ddx + lanesOf<V>(Sb[1]) * ddy + lanesOf<V>(Sb[2]) * ddz;
         by1 = lanesOf<V>(Sb[3]) * ddx + lanesOf<V>(Sb[4]) * ddy + lanesOf<V>(Sb[5]) * ddz;
         bz1 = lanesOf<V>(Sb[6]) * ddx + lanesOf<V>(Sb[7]) * ddy + lanesOf<V>(Sb[8]) * ddz;
-        const V spare = vsqrt(n2) - 1.0 - 1e-9;
-        const V gx1 = bx1 - qx, gy1 = by1 - qy, gz1 = bz1 - qz;
-        far2 = far2 & (gx1 * gx1 + gy1 * gy1 + gz1 * gz1 < spare * spare);
       }
       // The end now (reaction constraint while inside) and the new end, in sphere space.
       const V snx = lanesOf<V>(S[0]) * nx + lanesOf<V>(S[1]) * ny + lanesOf<V>(S[2]) * nz;
@@ -442,7 +441,7 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       const V skz = lanesOf<V>(S[6]) * kx + lanesOf<V>(S[7]) * ky + lanesOf<V>(S[8]) * kz;
       const V qex = qx + d * skx, qey = qy + d * sky, qez = qz + d * skz;
       const M end_in = (qex * qex + qey * qey + qez * qez) - 1.0 <= 1e-12;
-      const M acting = reach & ~far2;
+      const M acting = reach;
       full = full | (acting & inside_now);
       // The segment and the end's path only for the lanes they can still flag: not already flagged (by this
       // body's end or an earlier body), with the pivot outside (a pivot inside takes the end's test alone).

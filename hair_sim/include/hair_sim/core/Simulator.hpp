@@ -60,7 +60,6 @@ struct LaneBody {
   static constexpr int kCopies = 4;  ///< lanes::kLanes
   double centre[3][kCopies];
   double sinv[9][kCopies];  ///< S^-1, row-major
-  double min_radius[kCopies];
   double centre_before[3][kCopies];
   double sinv_before[9][kCopies];
   double bound_radius[kCopies];  ///< ball about the centre that holds the body (see Simulator::BodyBound)
