@@ -1,7 +1,8 @@
 #pragma once
 /// Internal to the core: the small-angle series of the rotation helpers, for one double (Simulator.cpp's
-/// rotationVectorBetween and rotateByVector) or for GCC vector lanes (StepLanes.cpp): the same operations in
-/// the same order, so a lane gives the bits of the scalar function.
+/// rotationVectorBetween, rotateByVector and rotatePerpendicular) or for GCC vector lanes (StepLanes.cpp's
+/// swing, rotationCosSin as rotatePerpendicular takes it): the same operations in the same order, so a lane
+/// gives the bits of the scalar function.
 
 namespace hair_sim {
 namespace series {

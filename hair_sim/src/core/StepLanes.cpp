@@ -8,7 +8,8 @@
 #include "hair_sim/core/events/EventSchedule.hpp"
 
 // The loops below over kLanes lanes are written for the vectoriser (no calls, selects instead of branches);
-// the few lanes that need atan2 or sin/cos (large angles) are finished by the scalar functions in between.
+// the few lanes of opposite directions (the hinge) or of large turns (sin and cos) are finished by the scalar
+// functions in between.
 // This file is compiled with -fno-math-errno (sqrt vectorises) and -ffp-contract=off (no FMA: the AVX2 and
 // baseline code give the same bits).
 
