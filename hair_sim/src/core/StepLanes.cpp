@@ -143,6 +143,7 @@ HAIR_SIM_ALWAYS_INLINE V loadLanes(const double* at) {
   __builtin_memcpy(&v, at, sizeof(V));
   return v;
 }
+static_assert(LaneBody::kCopies == kLanes, "a LaneBody value is stored once per lane of a block");
 /// The first lanes of a LaneBody value (stored once per lane): a vector read from memory.
 template <class T, class E>
 HAIR_SIM_ALWAYS_INLINE T lanesOf(const E* at) {
@@ -442,12 +443,11 @@ HAIR_SIM_ALWAYS_INLINE void blockBody(BlockJob& job, int l0) {
       const V skz = lanesOf<V>(S[6]) * kx + lanesOf<V>(S[7]) * ky + lanesOf<V>(S[8]) * kz;
       const V qex = qx + d * skx, qey = qy + d * sky, qez = qz + d * skz;
       const M end_in = (qex * qex + qey * qey + qez * qez) - 1.0 <= 1e-12;
-      const M acting = reach;
-      full = full | (acting & inside_now);
+      full = full | (reach & inside_now);
       // The segment and the end's path only for the lanes they can still flag: not already flagged (by this
       // body's end or an earlier body), with the pivot outside (a pivot inside takes the end's test alone).
-      const M open = acting & ~end_in & ~hit & ~full & ~pivot_inside;
-      hit = hit | (acting & end_in);
+      const M open = reach & ~end_in & ~hit & ~full & ~pivot_inside;
+      hit = hit | (reach & end_in);
       if (anyLane(open)) {
         M path = pathEnters(qx, qy, qz, qex, qey, qez);
         if (have_before) path = path | pathEnters(bx1, by1, bz1, qex, qey, qez);
