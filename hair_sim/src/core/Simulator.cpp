@@ -933,6 +933,9 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
   // max(d / smallest radius, |q_prev - q_pivot|)) lies outside the unit sphere: then nothing below
   // can fail for it, and it is skipped.
   near_.clear();
+  prepared_pivot_ = pivot;
+  prepared_previous_end_ = previous_end;
+  prepared_d_ = d;
   if (is_near_.size() != nb) {  // every entry is set below
     is_near_.resize(nb);
     q_pivot_.resize(nb);
@@ -1174,6 +1177,29 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
   return u;
 }
 
+namespace {
+/// escapeBodies' search of the sphere of directions about its first candidate: 13 rings at polar angles pi k
+/// / 12 (one direction at each pole, 24 around the others), their cosines and sines computed once.
+struct SphereDirection {
+  double cos_polar, sin_polar, cos_az, sin_az;
+};
+const std::vector<SphereDirection>& sphereDirections() {
+  static const std::vector<SphereDirection> table = [] {
+    std::vector<SphereDirection> t;
+    for (int ring = 0; ring <= 12; ++ring) {
+      const double polar = kPi * ring / 12.0;
+      const int around = ring == 0 || ring == 12 ? 1 : 24;
+      for (int j = 0; j < around; ++j) {
+        const double az = 2.0 * kPi * j / around;
+        t.push_back({std::cos(polar), std::sin(polar), std::cos(az), std::sin(az)});
+      }
+    }
+    return t;
+  }();
+  return table;
+}
+}  // namespace
+
 Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
                              bool have_before) const {
   const std::size_t nb = now.size();
@@ -1260,25 +1286,45 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   for (int c = 0; c < count; ++c)
     if (validBodies(cand[c])) return nearestClear(cand[c]);
   // No single escape clears every body (a pinch between overlapping bodies): search the sphere of
-  // directions around the pivot for a valid one, else the one with the smallest worst penetration.
+  // directions around the pivot for a valid one, else the one with the smallest worst penetration. The
+  // search is remembered for the sweep (pinch_searches_): relaxStrip repeats it for the same point.
   const Vec3 base = cand[count - 1];
-  Vec3 best = base;
+  for (const PinchSearch& s : pinch_searches_) {
+    if (s.sweep == sweep_ && s.bodies == now.data() && s.level == clear_level_ &&
+        s.have_before == have_before && s.d == d && s.prepared_d == prepared_d_ && s.pivot == pivot &&
+        s.base == base && s.prepared_pivot == prepared_pivot_ &&
+        s.prepared_previous_end == prepared_previous_end_)
+      return s.found ? nearestClear(s.result) : s.result;
+  }
+  PinchSearch& memo = pinch_searches_[static_cast<std::size_t>(pinch_next_)];
+  pinch_next_ = (pinch_next_ + 1) % kPinchSearches;
+  memo = PinchSearch{};
+  memo.sweep = sweep_;
+  memo.bodies = now.data();
+  memo.prepared_pivot = prepared_pivot_;
+  memo.prepared_previous_end = prepared_previous_end_;
+  memo.prepared_d = prepared_d_;
+  memo.pivot = pivot;
+  memo.d = d;
+  memo.base = base;
+  memo.result = base;
+  memo.level = clear_level_;
+  memo.have_before = have_before;
   double best_depth = 1e300;
   const Vec3 t1 = base.unitOrthogonal(), t2 = base.cross(t1);
-  for (int ring = 0; ring <= 12; ++ring) {
-    const double polar = kPi * ring / 12.0;
-    const int around = ring == 0 || ring == 12 ? 1 : 24;
-    for (int j = 0; j < around; ++j) {
-      const double az = 2.0 * kPi * j / around;
-      const Vec3 u = std::cos(polar) * base + std::sin(polar) * (std::cos(az) * t1 + std::sin(az) * t2);
-      if (validBodies(u)) return nearestClear(u);
-      double worst = 0.0;
-      for (std::size_t b = 0; b < nb; ++b)
-        worst = std::max(worst, std::max(0.0, -now[b].implicitValue(pivot + d * u)));
-      if (worst < best_depth) best_depth = worst, best = u;
+  for (const SphereDirection& s : sphereDirections()) {
+    const Vec3 u = s.cos_polar * base + s.sin_polar * (s.cos_az * t1 + s.sin_az * t2);
+    if (validBodies(u)) {
+      memo.found = true;
+      memo.result = u;
+      return nearestClear(u);
     }
+    double worst = 0.0;
+    for (std::size_t b = 0; b < nb; ++b)
+      worst = std::max(worst, std::max(0.0, -now[b].implicitValue(pivot + d * u)));
+    if (worst < best_depth) best_depth = worst, memo.result = u;
   }
-  return best;
+  return memo.result;
 }
 
 bool Simulator::stripOutsideBand(std::size_t strip) const {

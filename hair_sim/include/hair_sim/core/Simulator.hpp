@@ -38,6 +38,7 @@
 /// come closer than contact x rest length nor spread wider than far_factor x it, unless the bodies (which
 /// keep the last word) forbid every placement: in one simulated hour of the soak, 4 substeps, all under a
 /// nod of pi/2 at 20 Hz.
+#include <array>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -369,6 +370,26 @@ class Simulator {
   std::vector<char> pivot_inside_, is_near_;
   /// clearOf's tests: 0 all, 1 without the swept test, 2 the end point alone (resolveCollisions' fallbacks).
   int clear_level_ = 0;
+  /// What prepareBodies was last called with (escapeBodies' pinch searches are remembered by it).
+  Vec3 prepared_pivot_ = Vec3::Zero(), prepared_previous_end_ = Vec3::Zero();
+  double prepared_d_ = 0.0;
+  /// escapeBodies' search of the sphere of directions, remembered within a sweep: the direction it found
+  /// (`found`: the first clear one, from which the arc to dir is searched) or the least penetrating one,
+  /// for the same prepared segment, escape pivot, length, first candidate, test level and bodies. The search
+  /// is a function of these alone, so a remembered one gives the same bits. relaxStrip asks again and again
+  /// for the same point when no direction clears every body (a pinch).
+  struct PinchSearch {
+    long sweep = -1;
+    const Ellipsoid* bodies = nullptr;
+    Vec3 prepared_pivot = Vec3::Zero(), prepared_previous_end = Vec3::Zero(), pivot = Vec3::Zero();
+    Vec3 base = Vec3::Zero(), result = Vec3::Zero();
+    double prepared_d = 0.0, d = 0.0;
+    int level = 0;
+    bool have_before = false, found = false;
+  };
+  static constexpr int kPinchSearches = 8;
+  mutable std::array<PinchSearch, kPinchSearches> pinch_searches_{};
+  mutable int pinch_next_ = 0;  ///< the entry of pinch_searches_ written next
   std::vector<Vec3> row_dirs_;  ///< relaxStrip: a row's directions before the parallel fallback
   /// stepStrip: the points of the strip it placed itself (the others took the lanes' results, so their
   /// state already equals the lanes' buffers, as the roots' does), and whether relaxStrip moved it (then any
