@@ -143,6 +143,49 @@ TEST(SimulatorCollisionTest, EscapeStopsASegmentOnTheSurfaceItWasThrownInto) {
 
 SimConfig defaultConfig() { return loadSimConfig(test::repoPath("config/hair_sim.yaml")); }
 
+TEST(SimulatorCollisionTest, APinchedSegmentTakesTheLeastPenetratingDirection) {
+  // Six spheres about the roots O on the axes (centres O +- c e_i, inflated radius R < c): the roots lie
+  // outside every one, but every end at the segment length d from them lies inside one, so no direction
+  // clears every body (a pinch) and escapeBodies searches the sphere of directions for the least penetrating
+  // one. For a direction u the depth is R - |d u - c e| for the nearest axis e, least where u is farthest
+  // from every axis: the cube's corners, u = (1, 1, 1) / sqrt 3, depth R - sqrt(d^2 + c^2 - 2 d c / sqrt 3)
+  // = 3.06 mm. The search (directions 15 degrees apart) lands within 9.7 degrees of a corner: at most R -
+  // sqrt(d^2 + c^2 - 2 d c cos 45 degrees) = 18.5 mm. The two roots lie 0.5 mm either side of O, which moves
+  // every end by as much against these bounds. The hair hangs straight down at the start, its first ends at
+  // the centre of the lower sphere (95 mm deep).
+  PhysicsParameters p = quiet();
+  const double d = 0.1, c = 0.1, R = 0.095, offset = 0.0005;
+  const Hairstyle style = test::hangingStrip(2, 4, d, 0.0, 2.0 * offset);  // roots at y = +-offset
+  const double margin = style.strips[0].thickness_margin;
+  const Vec3 o(0.0, 0.0, std::sqrt(0.01 - offset * offset));  // the roots' z
+  std::vector<Body> bodies;
+  for (int axis = 0; axis < 3; ++axis)
+    for (double sign : {-1.0, 1.0})
+      bodies.push_back(worldBody("ball", o + sign * c * Vec3::Unit(axis), Vec3::Constant(R - margin)));
+  const double corner = R - std::sqrt(d * d + c * c - 2.0 * d * c / std::sqrt(3.0));
+  const double grid = R - std::sqrt(d * d + c * c - 2.0 * d * c * std::sqrt(0.5));  // cos 45 degrees
+  ASSERT_NEAR(corner, 0.00306, 1e-5);
+  ASSERT_NEAR(grid, 0.0185, 1e-4);
+  Simulator sim(style, p, bodies);
+  StepInputs in;
+  in.body_frames.assign(bodies.size(), Iso3::Identity());
+  for (int i = 0; i < 24; ++i) {
+    sim.step(in);
+    const std::vector<Vec3>& x = sim.positionsHead();
+    for (const Vec3& q : x) ASSERT_TRUE(q.allFinite()) << "step " << i;
+    // The first row: pinched, so inside a body, but by no more than the search's resolution allows.
+    for (int col = 0; col < 2; ++col) {
+      const Vec3& end = x[static_cast<std::size_t>(style.strips[0].index(1, col))];
+      double depth = 0.0;
+      for (const Body& b : bodies) depth = std::max(depth, R - (end - b.shape.center()).norm());
+      EXPECT_GE(depth, corner - offset - 1e-9) << "step " << i << ", column " << col;
+      EXPECT_LE(depth, grid + offset) << "step " << i << ", column " << col;
+    }
+    EXPECT_GE(sim.maxPenetration(), corner - offset - 1e-9) << "step " << i;
+    EXPECT_LE(sim.maxPenetration(), grid + offset) << "step " << i;
+  }
+}
+
 TEST(SimulatorCollisionTest, ViolentHeadShakeWithWindOntoHeadAndShouldersNeverPenetrates) {
   const SimConfig config = defaultConfig();
   ASSERT_GE(config.bodies.size(), 5u);
