@@ -377,7 +377,9 @@ class Simulator {
   /// (`found`: the first clear one, from which the arc to dir is searched) or the least penetrating one,
   /// for the same prepared segment, escape pivot, length, first candidate, test level and bodies. The search
   /// is a function of these alone, so a remembered one gives the same bits. relaxStrip asks again and again
-  /// for the same point when no direction clears every body (a pinch).
+  /// for the same point when no direction clears every body (a pinch): 33,293 of 33,353 searches of the slow
+  /// fuzz input were found here with 32 entries (33,005 with 8). Written by escapeBodies (const: the calling
+  /// thread's exact step alone runs it, never a helper).
   struct PinchSearch {
     long sweep = -1;
     const Ellipsoid* bodies = nullptr;
@@ -387,7 +389,7 @@ class Simulator {
     int level = 0;
     bool have_before = false, found = false;
   };
-  static constexpr int kPinchSearches = 8;
+  static constexpr int kPinchSearches = 32;
   mutable std::array<PinchSearch, kPinchSearches> pinch_searches_{};
   mutable int pinch_next_ = 0;  ///< the entry of pinch_searches_ written next
   std::vector<Vec3> row_dirs_;  ///< relaxStrip: a row's directions before the parallel fallback
