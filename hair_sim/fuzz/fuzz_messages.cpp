@@ -11,6 +11,10 @@
 /// it). A bug aborts: a crash, an unexpected exception, undefined behaviour (under the sanitizers), an event
 /// eventFromMsg accepts but EventSchedule::add refuses, or a non-finite control point.
 ///
+/// With HAIR_SIM_FUZZ_STATE_HASH set in the environment, each input that reaches the substeps prints the
+/// FNV-1a hash of the final control points (head frame) on stdout (the test PinchMemoryGivesTheSameBits
+/// compares them between two builds).
+///
 /// The glue between those calls (lookups, holding the last good pose, the order of the calls) is
 /// HairSimNode's, repeated here because the node needs a master: keep it in step with HairSimNode::onTf,
 /// update and schedule.
@@ -214,6 +218,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     sim.step(in);
     for (const Vec3& x : sim.positionsHead())
       if (!x.allFinite()) bug("non-finite control point after substep " + std::to_string(n));
+  }
+  if (std::getenv("HAIR_SIM_FUZZ_STATE_HASH")) {
+    std::uint64_t h = 1469598103934665603ULL;
+    for (const Vec3& x : sim.positionsHead()) {
+      unsigned char bytes[sizeof(double) * 3];
+      std::memcpy(bytes, x.data(), sizeof(bytes));
+      for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ULL;
+    }
+    std::printf("state_hash %016llx\n", static_cast<unsigned long long>(h));
   }
   return 0;
 }

@@ -1289,6 +1289,8 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   // directions around the pivot for a valid one, else the one with the smallest worst penetration. The
   // search is remembered for the sweep (pinch_searches_): relaxStrip repeats it for the same point.
   const Vec3 base = cand[count - 1];
+  // (HAIR_SIM_NO_PINCH_MEMORY: every search anew, for the test PinchMemoryGivesTheSameBits.)
+#if !defined(HAIR_SIM_NO_PINCH_MEMORY)
   for (const PinchSearch& s : pinch_searches_) {
     if (s.sweep == sweep_ && s.bodies == now.data() && s.level == clear_level_ &&
         s.have_before == have_before && s.d == d && s.prepared_d == prepared_d_ && s.pivot == pivot &&
@@ -1298,6 +1300,9 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   }
   PinchSearch& memo = pinch_searches_[static_cast<std::size_t>(pinch_next_)];
   pinch_next_ = (pinch_next_ + 1) % kPinchSearches;
+#else
+  PinchSearch memo;
+#endif
   memo = PinchSearch{};
   memo.sweep = sweep_;
   memo.bodies = now.data();
