@@ -38,6 +38,7 @@
 #include <memory>
 #include <string>
 
+#include "../test/SimdDump.hpp"
 #include "hair_sim/core/Simulator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
@@ -220,12 +221,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (!x.allFinite()) bug("non-finite control point after substep " + std::to_string(n));
   }
   if (std::getenv("HAIR_SIM_FUZZ_STATE_HASH")) {
-    std::uint64_t h = 1469598103934665603ULL;
-    for (const Vec3& x : sim.positionsHead()) {
-      unsigned char bytes[sizeof(double) * 3];
-      std::memcpy(bytes, x.data(), sizeof(bytes));
-      for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ULL;
-    }
+    std::uint64_t h = 14695981039346656037ULL;
+    simd_dump::hashBytes(h, sim.positionsHead().data(), sim.positionsHead().size() * sizeof(Vec3));
     std::printf("state_hash %016llx\n", static_cast<unsigned long long>(h));
   }
   return 0;

@@ -1,6 +1,6 @@
 #pragma once
-/// Shared by the SIMD bit-identity dump programs (TessellatorSimdDump, HairLookSimdDump): a byte hash and
-/// deterministic curved strips.
+/// Shared by the bit-identity dump programs (TessellatorSimdDump, HairLookSimdDump, PinchMemoryDump and
+/// fuzz_messages' state hash): a byte hash and deterministic curved strips.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>

@@ -161,10 +161,7 @@ TEST(SimulatorCollisionTest, APinchedSegmentTakesTheLeastPenetratingDirection) {
   const Hairstyle style = test::hangingStrip(2, 4, d, 0.0, 2.0 * offset);  // roots at y = +-offset
   const double margin = style.strips[0].thickness_margin;
   const Vec3 o(0.0, 0.0, std::sqrt(0.01 - offset * offset));  // the roots' z
-  std::vector<Body> bodies;
-  for (int axis = 0; axis < 3; ++axis)
-    for (double sign : {-1.0, 1.0})
-      bodies.push_back(worldBody("ball", o + sign * c * Vec3::Unit(axis), Vec3::Constant(R - margin)));
+  const std::vector<Body> bodies = test::axisBalls(o, c, R - margin, R - margin);
   const double corner = R - std::sqrt(d * d + c * c - 2.0 * d * c / std::sqrt(3.0));
   const double grid = R - std::sqrt(d * d + c * c - 2.0 * d * c * std::sqrt(0.5));  // cos 45 degrees
   ASSERT_NEAR(corner, 0.00306, 1e-5);

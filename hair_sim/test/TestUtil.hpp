@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "hair_sim/core/model/Body.hpp"
 #include "hair_sim/core/model/Hairstyle.hpp"
 
 namespace hair_sim {
@@ -54,6 +55,19 @@ inline Hairstyle hangingStrip(int columns, int rows, double d, double tilt, doub
   }
   style.strips.push_back(s);
   return style;
+}
+
+/// Six spheres in the world frame on the axes about o (centres o +- c e_i) of radius `negative` on the
+/// negative axes and `positive` on the positive ones: a pinch for the segments hung from points near o when
+/// every end at their length lies inside one.
+inline std::vector<Body> axisBalls(const Vec3& o, double c, double negative, double positive) {
+  std::vector<Body> bodies;
+  for (int axis = 0; axis < 3; ++axis)
+    for (double sign : {-1.0, 1.0})
+      bodies.push_back(Body{"ball", "world",
+                            Ellipsoid(o + sign * c * Vec3::Unit(axis), Mat3::Identity(),
+                                      Vec3::Constant(sign > 0.0 ? positive : negative))});
+  return bodies;
 }
 
 /// Runs f and returns the std::invalid_argument message it throws (fails the test if none).

@@ -933,9 +933,7 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
   // max(d / smallest radius, |q_prev - q_pivot|)) lies outside the unit sphere: then nothing below
   // can fail for it, and it is skipped.
   near_.clear();
-  prepared_pivot_ = pivot;
   prepared_previous_end_ = previous_end;
-  prepared_d_ = d;
   if (is_near_.size() != nb) {  // every entry is set below
     is_near_.resize(nb);
     q_pivot_.resize(nb);
@@ -1292,10 +1290,9 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   // (HAIR_SIM_NO_PINCH_MEMORY: every search anew, for the test PinchMemoryGivesTheSameBits.)
 #if !defined(HAIR_SIM_NO_PINCH_MEMORY)
   for (const PinchSearch& s : pinch_searches_) {
-    if (s.sweep == sweep_ && s.bodies == now.data() && s.level == clear_level_ &&
-        s.have_before == have_before && s.d == d && s.prepared_d == prepared_d_ && s.pivot == pivot &&
-        s.base == base && s.prepared_pivot == prepared_pivot_ &&
-        s.prepared_previous_end == prepared_previous_end_)
+    if (s.sweep == sweep_ && s.bodies == now.data() && s.pivot == pivot && s.d == d &&
+        s.previous_end == prepared_previous_end_ && s.base == base && s.level == clear_level_ &&
+        s.have_before == have_before)
       return s.found ? nearestClear(s.result) : s.result;
   }
   PinchSearch& memo = pinch_searches_[static_cast<std::size_t>(pinch_next_)];
@@ -1306,13 +1303,10 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   memo = PinchSearch{};
   memo.sweep = sweep_;
   memo.bodies = now.data();
-  memo.prepared_pivot = prepared_pivot_;
-  memo.prepared_previous_end = prepared_previous_end_;
-  memo.prepared_d = prepared_d_;
   memo.pivot = pivot;
   memo.d = d;
-  memo.base = base;
-  memo.result = base;
+  memo.previous_end = prepared_previous_end_;
+  memo.base = memo.result = base;
   memo.level = clear_level_;
   memo.have_before = have_before;
   double best_depth = 1e300;

@@ -370,22 +370,20 @@ class Simulator {
   std::vector<char> pivot_inside_, is_near_;
   /// clearOf's tests: 0 all, 1 without the swept test, 2 the end point alone (resolveCollisions' fallbacks).
   int clear_level_ = 0;
-  /// What prepareBodies was last called with (escapeBodies' pinch searches are remembered by it).
-  Vec3 prepared_pivot_ = Vec3::Zero(), prepared_previous_end_ = Vec3::Zero();
-  double prepared_d_ = 0.0;
+  /// The previous end prepareBodies was last called with (its pivot and length are escapeBodies' own).
+  Vec3 prepared_previous_end_ = Vec3::Zero();
   /// escapeBodies' search of the sphere of directions, remembered within a sweep: the direction it found
   /// (`found`: the first clear one, from which the arc to dir is searched) or the least penetrating one,
-  /// for the same prepared segment, escape pivot, length, first candidate, test level and bodies. The search
-  /// is a function of these alone, so a remembered one gives the same bits. relaxStrip asks again and again
+  /// for the same bodies, pivot, length, previous end, first candidate and test level. The search is a
+  /// function of these alone, so a remembered one gives the same bits. relaxStrip asks again and again
   /// for the same point when no direction clears every body (a pinch): 33,293 of 33,353 searches of the slow
   /// fuzz input were found here with 32 entries (33,005 with 8). Written by escapeBodies (const: the calling
   /// thread's exact step alone runs it, never a helper).
   struct PinchSearch {
     long sweep = -1;
     const Ellipsoid* bodies = nullptr;
-    Vec3 prepared_pivot = Vec3::Zero(), prepared_previous_end = Vec3::Zero(), pivot = Vec3::Zero();
-    Vec3 base = Vec3::Zero(), result = Vec3::Zero();
-    double prepared_d = 0.0, d = 0.0;
+    Vec3 pivot = Vec3::Zero(), previous_end = Vec3::Zero(), base = Vec3::Zero(), result = Vec3::Zero();
+    double d = 0.0;
     int level = 0;
     bool have_before = false, found = false;
   };
