@@ -150,7 +150,7 @@ TEST(SimulatorCollisionTest, APinchedSegmentTakesTheLeastPenetratingDirection) {
   // one. For a direction u the depth is R - |d u - c e| for the nearest axis e, least where u is farthest
   // from every axis: the cube's corners, u = (1, 1, 1) / sqrt 3, depth R - sqrt(d^2 + c^2 - 2 d c / sqrt 3)
   // = 3.06 mm. The search's directions (rings 15 degrees apart about its first candidate) come within
-  // about 10.6 degrees of any direction; over 20,000 random first candidates the least depth among them is at
+  // about 10.5 degrees of any direction; over 20,000 random first candidates the least depth among them is at
   // most 13.9 mm (computed outside this test), within the bound taken here: the depth at 45 degrees from an
   // axis, R - sqrt(d^2 + c^2 - 2 d c cos 45 degrees) = 18.5 mm. A search that kept its first candidate or the
   // hanging direction would leave the end about 95 mm deep. The two roots lie 0.5 mm either side of O, which
