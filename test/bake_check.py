@@ -6,9 +6,11 @@ bar: drawn on a terminal (run under `script`), absent when stderr is a pipe.
 
 Usage: bake_check.py OFFLINE_BIN REPO_ROOT
 """
+import atexit
 import csv
 import math
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -35,6 +37,7 @@ def check(condition, message):
 def main():
     offline, repo = sys.argv[1], sys.argv[2]
     work = tempfile.mkdtemp(prefix='hair_sim_bake_')
+    atexit.register(shutil.rmtree, work, True)  # (also after a failed check's sys.exit)
     scenario = os.path.join(work, 'short.yaml')
     with open(scenario, 'w') as f:
         f.write(SCENARIO)

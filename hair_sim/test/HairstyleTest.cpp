@@ -32,7 +32,7 @@ TEST(HairstyleTest, LoadsAndRoundTripsBitIdentically) {
   EXPECT_EQ(a.strips[0].rows, 4);
   EXPECT_DOUBLE_EQ(a.strips[0].hair_length, 0.15);
   EXPECT_NEAR(a.strips[0].columnLength(0), 0.1505012563, 1e-9);
-  const std::string path = ::testing::TempDir() + "hair_sim_saved.yaml";
+  const std::string path = test::tempPath("saved.yaml");
   saveHairstyle(a, path);
   const Hairstyle b = loadHairstyle(path);
   ASSERT_EQ(b.strips[0].points.size(), a.strips[0].points.size());

@@ -155,19 +155,19 @@ Command shell(const std::string& cmd) {
 const std::string kBin = HAIR_SIM_OFFLINE_BIN;
 
 TEST(OfflineRunnerTest, CommandWritesCsvPosesAndJsonSummary) {
-  const std::string dir = ::testing::TempDir();
+  const std::string pts_path = test::tempPath("pts.csv"), poses_path = test::tempPath("poses.csv");
   const std::string scenario = test::writeTemp(
       "short.yaml",
       "duration: 0.5\noutput_rate: 20\nhead:\n  - {t: 0, position: [0, 0, 1.6], rpy: [0, 0, 0]}\n"
       "  - {t: 0.5, position: [0, 0.1, 1.6], rpy: [0, 0, 0.3]}\n");
   const Command c = shell(kBin + " --config " + test::repoPath("config/hair_sim.yaml") + " --scenario " +
-                          scenario + " --out " + dir + "pts.csv --poses-out " + dir + "poses.csv");
+                          scenario + " --out " + pts_path + " --poses-out " + poses_path);
   ASSERT_EQ(c.status, 0) << c.out;
   const std::string last = c.out.substr(c.out.rfind('{'));
   for (const char* key : {"\"steps\": 120", "\"control_points\"", "\"sim_seconds\": 0.5", "\"wall_seconds\"",
                           "\"ns_per_control_point_update\""})
     EXPECT_NE(last.find(key), std::string::npos) << key << " in " << last;
-  std::ifstream pts(dir + "pts.csv"), poses(dir + "poses.csv");
+  std::ifstream pts(pts_path), poses(poses_path);
   std::string header;
   std::getline(pts, header);
   EXPECT_EQ(header, "t,strip,column,row,x,y,z");

@@ -79,7 +79,7 @@ TEST(PlyWriterTest, WritesHeaderVerticesAndBothWindings) {
   const std::vector<StripMesh> meshes = {smallMesh(0.0), smallMesh(0.5)};
   std::vector<std::vector<Rgba>> colours(2, std::vector<Rgba>(8, Rgba{0.5f, 1.0f, 0.0f, 0.25f}));
   colours[1][3] = Rgba{1.0f, 0.0f, 2.0f, -1.0f};  // clamped on output
-  const std::string path = ::testing::TempDir() + "hair_sim_ply_writer_test.ply";
+  const std::string path = test::tempPath("ply_writer_test.ply");
   PlyWriter::write(path, meshes, colours);
 
   const PlyFile ply = readPly(path);
@@ -154,11 +154,10 @@ TEST(PlyWriterTest, WritesHeaderVerticesAndBothWindings) {
       EXPECT_LT(index, 32);
     }
   }
-  std::remove(path.c_str());
 }
 
 TEST(PlyWriterTest, NoColoursMeansOpaqueWhite) {
-  const std::string path = ::testing::TempDir() + "hair_sim_ply_writer_white.ply";
+  const std::string path = test::tempPath("ply_writer_white.ply");
   PlyWriter::write(path, {smallMesh(0.0)}, {});
   const PlyFile ply = readPly(path);
   ASSERT_EQ(ply.payload.size(), 16u * 28u + 12u * 13u);
@@ -167,7 +166,6 @@ TEST(PlyWriterTest, NoColoursMeansOpaqueWhite) {
       EXPECT_EQ(byteAt(ply.payload, v * 28 + c), 255u);
     }
   }
-  std::remove(path.c_str());
 }
 
 TEST(PlyWriterTest, BadPathThrowsNamingIt) {
@@ -181,7 +179,7 @@ TEST(PlyWriterTest, BadPathThrowsNamingIt) {
 }
 
 TEST(PlyWriterTest, InconsistentInputsThrow) {
-  const std::string path = ::testing::TempDir() + "hair_sim_ply_writer_bad.ply";
+  const std::string path = test::tempPath("ply_writer_bad.ply");
   // Each message says what does not fit (smallMesh has 8 vertices).
   test::expectInvalid([&] { PlyWriter::write(path, {smallMesh(0.0)}, {std::vector<Rgba>(7)}); },
                       "colours of mesh 0 must have 8 entries, got 7");

@@ -23,10 +23,25 @@ inline std::string repoPath(const std::string& relative) {
   return std::string(HAIR_SIM_REPO_ROOT) + "/" + relative;
 }
 
-/// Writes text to a fresh file under the test's temp folder and returns its path.
-inline std::string writeTemp(const std::string& name, const std::string& text) {
+/// A path for a scratch file `name` under the test's temp folder, removed when the test program ends.
+inline std::string tempPath(const std::string& name) {
+  // Removes the files when the program exits normally (a crashed test leaves its files for a look).
+  struct Remover {
+    std::vector<std::string> paths;
+    ~Remover() {
+      for (const std::string& p : paths) std::remove(p.c_str());
+    }
+  };
+  static Remover remover;
   // The process id in the name: CTest runs test executables in parallel, and they share TempDir().
   const std::string path = ::testing::TempDir() + "hair_sim_" + std::to_string(::getpid()) + "_" + name;
+  remover.paths.push_back(path);
+  return path;
+}
+
+/// Writes text to a fresh file under the test's temp folder (tempPath) and returns its path.
+inline std::string writeTemp(const std::string& name, const std::string& text) {
+  const std::string path = tempPath(name);
   std::ofstream out(path);
   out << text;
   return path;
