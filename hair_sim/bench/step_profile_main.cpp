@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "../test/SimdDump.hpp"
 #include "BenchMotion.hpp"
 
 using namespace hair_sim;
@@ -103,10 +104,7 @@ int main(int argc, char** argv) {
     }
     // FNV-1a over the positions' bytes (contiguous: Vec3 is three doubles).
     const std::vector<Vec3>& positions = sim.positionsHead();
-    const unsigned char* bytes = reinterpret_cast<const unsigned char*>(positions.data());
-    std::uint64_t hash = 14695981039346656037ULL;
-    for (std::size_t k = 0; k < positions.size() * sizeof(Vec3); ++k)
-      hash = (hash ^ bytes[k]) * 1099511628211ULL;
+    const std::uint64_t hash = simd_dump::hashOf(positions.data(), positions.size() * sizeof(Vec3));
     const double strip_count = static_cast<double>(sim.hairstyle().strips.size());
     std::printf(
         "{\"strips\": %ld, \"control_points\": %d, \"path\": \"%s\", \"threads\": %ld, \"warmup\": %ld, "

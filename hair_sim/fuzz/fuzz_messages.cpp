@@ -221,8 +221,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (!x.allFinite()) bug("non-finite control point after substep " + std::to_string(n));
   }
   if (std::getenv("HAIR_SIM_FUZZ_STATE_HASH")) {
-    std::uint64_t h = 14695981039346656037ULL;
-    simd_dump::hashBytes(h, sim.positionsHead().data(), sim.positionsHead().size() * sizeof(Vec3));
+    const std::uint64_t h =
+        simd_dump::hashOf(sim.positionsHead().data(), sim.positionsHead().size() * sizeof(Vec3));
     std::printf("state_hash %016llx\n", static_cast<unsigned long long>(h));
   }
   return 0;

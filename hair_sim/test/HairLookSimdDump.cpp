@@ -16,6 +16,7 @@
 using namespace hair_sim;
 using simd_dump::curvedGrid;
 using simd_dump::hashBytes;
+using simd_dump::kHashBasis;
 
 int main() {
   HairLookParameters fractional;
@@ -46,7 +47,7 @@ int main() {
             for (double hair_length : {10.0, 0.05 * rows}) {
               tessellator.tessellate(grid, columns, rows, hair_length, mesh);
               for (int c = 0; c < 2; ++c) {
-                std::uint64_t hash = 14695981039346656037ULL;
+                std::uint64_t hash = kHashBasis;
                 look.colorize(mesh, colours[c], static_cast<std::uint32_t>(seed * 7919), out);
                 hashBytes(hash, out.data(), out.size() * sizeof(Rgba));
                 look.stripeProfiles(mesh, 12345U, profiles);

@@ -38,8 +38,8 @@ int main() {
           for (int n = 0; n < 12; ++n) {
             in.wind = Vec3(gust * std::sin(0.5 * n), gust * std::cos(0.3 * n), 0.0);
             sim.step(in);
-            std::uint64_t h = 14695981039346656037ULL;
-            simd_dump::hashBytes(h, sim.positionsHead().data(), sim.positionsHead().size() * sizeof(Vec3));
+            const std::uint64_t h =
+                simd_dump::hashOf(sim.positionsHead().data(), sim.positionsHead().size() * sizeof(Vec3));
             std::printf("radius %.3f columns %d spacing %.3f gust %.0f substep %2d: %016llx\n",
                         positive_radius, columns, spacing, gust, n, static_cast<unsigned long long>(h));
           }

@@ -11,12 +11,22 @@
 namespace hair_sim {
 namespace simd_dump {
 
-/// FNV-1a over raw bytes.
+/// FNV-1a's offset basis: where a hash starts.
+constexpr std::uint64_t kHashBasis = 14695981039346656037ULL;
+
+/// FNV-1a over raw bytes, continuing `hash`.
 inline void hashBytes(std::uint64_t& hash, const void* data, std::size_t size) {
   const unsigned char* bytes = static_cast<const unsigned char*>(data);
   for (std::size_t i = 0; i < size; ++i) {
     hash = (hash ^ bytes[i]) * 1099511628211ULL;
   }
+}
+
+/// FNV-1a of raw bytes, from the offset basis.
+inline std::uint64_t hashOf(const void* data, std::size_t size) {
+  std::uint64_t hash = kHashBasis;
+  hashBytes(hash, data, size);
+  return hash;
 }
 
 /// A curved strip (trigonometric bends), deterministic: `seed` varies it; the pitch starts at pitch0 and

@@ -15,6 +15,7 @@
 using namespace hair_sim;
 using simd_dump::curvedGrid;
 using simd_dump::hashBytes;
+using simd_dump::kHashBasis;
 
 /// Adds every output bit of the mesh but u_param (positions, normals, tangents, v_param) to the hash.
 void hashMesh(std::uint64_t& hash, const StripMesh& m) {
@@ -36,7 +37,7 @@ int main() {
           const std::vector<Vec3> grid = curvedGrid(columns, rows, seed, 0.3, 0.4, 0.2);
           for (double hair_length : {10.0, 0.05 * rows, 0.03 * rows}) {
             tessellator.tessellate(grid, columns, rows, hair_length, mesh);
-            std::uint64_t hash = 14695981039346656037ULL;
+            std::uint64_t hash = kHashBasis;
             hashMesh(hash, mesh);
             std::printf("level %d x %d, %d x %d, seed %d, length %.2f: %016llx\n", level.samples_across,
                         level.samples_along, columns, rows, seed, hair_length,
@@ -72,7 +73,7 @@ int main() {
     tessellator.tessellate(strips.data(), strips.size(), meshes.data());
     for (std::size_t i = 0; i < meshes.size(); ++i) {
       const StripMesh& m = meshes[i];
-      std::uint64_t hash = 14695981039346656037ULL;
+      std::uint64_t hash = kHashBasis;
       hashMesh(hash, m);
       hashBytes(hash, m.u_param.data(), m.u_param.size() * sizeof(float));
       std::printf("batch, level %d x %d, strip %zu (%d x %d): %016llx\n", level.samples_across,
@@ -95,7 +96,7 @@ int main() {
           }
         }
         tessellator.tessellate(grid, columns, rows, 0.5, mesh);
-        std::uint64_t hash = 14695981039346656037ULL;
+        std::uint64_t hash = kHashBasis;
         hashBytes(hash, mesh.positions.data(), mesh.positions.size() * sizeof(Vec3));
         hashBytes(hash, mesh.v_param.data(), mesh.v_param.size() * sizeof(float));
         std::printf("overflow, level 1 x %d, %d x %d: %016llx\n", samples_along, columns, rows,
@@ -121,7 +122,7 @@ int main() {
       StripMesh meshes[4];
       tessellator.tessellate(strips, 4, meshes);
       for (int l = 0; l < 4; ++l) {
-        std::uint64_t hash = 14695981039346656037ULL;
+        std::uint64_t hash = kHashBasis;
         hashBytes(hash, meshes[l].positions.data(), meshes[l].positions.size() * sizeof(Vec3));
         hashBytes(hash, meshes[l].v_param.data(), meshes[l].v_param.size() * sizeof(float));
         std::printf("overflow batch, level 1 x %d, 2 x %d, strip %d: %016llx\n", samples_along, rows, l,
@@ -141,7 +142,7 @@ int main() {
     plain[static_cast<std::size_t>(2 * r + 1)] = Vec3(0.01, 0.0, -0.02 * r);
   }
   auto hashAll = [](const StripMesh& m) {
-    std::uint64_t hash = 14695981039346656037ULL;
+    std::uint64_t hash = kHashBasis;
     hashMesh(hash, m);
     return static_cast<unsigned long long>(hash);
   };
