@@ -6,29 +6,37 @@
 # run also prints its state hash: the same hash means the same hair bit for bit.
 #
 # usage: scripts/ab_step.sh OLD_COMMIT [STRIPS=1000] [ROUNDS=8] [SUBSTEPS=480]
-#   AB_DIR (default /tmp/hair_sim_ab): the old commit's source and build; AB_CORE (default 0): the core.
+#   AB_DIR (default /tmp/hair_sim_ab): the old commit's source and build; AB_CORE (default 0): the core;
+#   AB_THREADS (default 1): the step's threads (--threads); above 1 the runs are pinned to AB_CORES
+#   (default: every core) instead of AB_CORE.
 # On this shared VM one binary's runs differ by 20-30 % minutes apart: a change of a few per cent needs many
 # rounds, and a median ratio within 0.95-1.05 is no evidence either way (docs/benchmarks.md).
 set -euo pipefail
 if [ $# -lt 1 ]; then
-  sed -n '2,11p' "$0" >&2
+  sed -n '2,13p' "$0" >&2
   exit 2
 fi
 STRIPS=${2:-1000}
 ROUNDS=${3:-8}
 SUBSTEPS=${4:-480}
 CORE=${AB_CORE:-0}
+THREADS=${AB_THREADS:-1}
+if ! [[ "$THREADS" =~ ^[1-9][0-9]*$ ]]; then
+  echo "ab_step.sh: AB_THREADS must be a whole number >= 1, not '$THREADS'" >&2
+  exit 2
+fi
+if [ "$THREADS" -gt 1 ]; then CORE=${AB_CORES:-0-$(($(nproc) - 1))}; fi
 # shellcheck source=scripts/ab_build.sh
 . "$(dirname "$0")/ab_build.sh"
 ab_build "$1" hair_sim_step_profile
 
 run() {  # binary -> "ns_per_update state_hash"
-  taskset -c "$CORE" "$1" --strips "$STRIPS" --warmup 240 --substeps "$SUBSTEPS" |
+  taskset -c "$CORE" "$1" --strips "$STRIPS" --warmup 240 --substeps "$SUBSTEPS" --threads "$THREADS" |
     sed -n 's/.*"ns_per_update": \([0-9.]*\).*"state_hash": "\([0-9a-f]*\)".*/\1 \2/p'
 }
 
 echo "old $OLD, new: the working tree ($(git -C "$ROOT" rev-parse --short HEAD) + changes); $STRIPS strips," \
-  "$SUBSTEPS substeps after 240, $ROUNDS rounds on core $CORE"
+  "$SUBSTEPS substeps after 240, $THREADS thread(s), $ROUNDS rounds on core(s) $CORE"
 results="$AB_DIR/results.txt"
 : >"$results"
 for i in $(seq 1 "$ROUNDS"); do
