@@ -2,6 +2,19 @@
 # Sourced by ab_step.sh and ab_bench.sh: builds TARGET (Release) of the commit OLD in a git worktree under
 # AB_DIR and of the working tree in build-release/, and sets OLD_BIN and NEW_BIN to the two executables.
 # usage (after set -euo pipefail): ab_build OLD_COMMIT TARGET
+# (step_parts.sh uses release_configure alone.)
+
+# Configures the source tree SRC for a Release build in BUILD (as ./run.sh bench does; log in BUILD.cmake.log),
+# or exits 1 naming the log; $name names the calling script.
+release_configure() {
+  local src="$1" build="$2"
+  cmake -S "$src" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCATKIN_DEVEL_PREFIX="$build/devel" \
+    -DCATKIN_ENABLE_TESTING=OFF >"$build.cmake.log" 2>&1 || {
+    echo "$name: cmake failed for $src (see $build.cmake.log)" >&2
+    exit 1
+  }
+}
+
 ab_build() {
   export PATH=/usr/bin:$PATH
   ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -21,14 +34,9 @@ ab_build() {
     git -C "$ROOT" worktree add -q --detach "$AB_DIR/src" "$OLD"
   fi
   mkdir -p "$AB_DIR/build" "$ROOT/build-release"
-  local src build
+  local pair
   for pair in "$AB_DIR/src:$AB_DIR/build" "$ROOT:$ROOT/build-release"; do
-    src="${pair%%:*}" build="${pair#*:}"
-    cmake -S "$src" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCATKIN_DEVEL_PREFIX="$build/devel" \
-      -DCATKIN_ENABLE_TESTING=OFF >"$build.cmake.log" 2>&1 || {
-      echo "$name: cmake failed for $src (see $build.cmake.log)" >&2
-      exit 1
-    }
+    release_configure "${pair%%:*}" "${pair#*:}"
   done
   cmake --build "$AB_DIR/build" -j"$(nproc)" --target "$target" >"$AB_DIR/build.log" 2>&1 || {
     echo "$name: build of $OLD failed (see $AB_DIR/build.log)" >&2

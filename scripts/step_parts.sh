@@ -27,27 +27,23 @@ for n in "${SIZES[@]}"; do
 done
 CORE=${AB_CORE:-1}
 
-# Configured as ./run.sh bench configures it (the dependencies are those of ./run.sh bench or test).
+# The Release build of ./run.sh bench (its dependencies are those of ./run.sh bench or test).
+name=step_parts.sh
+# shellcheck source=scripts/ab_build.sh
+. "$(dirname "$0")/ab_build.sh"
 mkdir -p "$ROOT/build-release"
-cmake -S "$ROOT" -B "$ROOT/build-release" -DCMAKE_BUILD_TYPE=Release \
-  -DCATKIN_DEVEL_PREFIX="$ROOT/build-release/devel" -DCATKIN_ENABLE_TESTING=OFF >"$ROOT/build-release/cmake.log" 2>&1 || {
-  echo "step_parts.sh: cmake failed (see build-release/cmake.log)" >&2
-  exit 1
-}
+release_configure "$ROOT" "$ROOT/build-release"
 cmake --build "$ROOT/build-release" -j"$(nproc)" --target hair_sim_step_profile >/dev/null
 BIN="$ROOT/build-release/devel/lib/hair_sim/hair_sim_step_profile"
 
 WORK=$(mktemp -d /tmp/hair_sim_parts.XXXXXX)
 trap 'rm -rf "$WORK"' EXIT
-# The four copies: the hairstyle by its absolute path (the copies live elsewhere), the springs switched off
-# and the bodies cut by text, each change checked.
+# The four copies: the springs switched off and the bodies cut by text, each change checked. (Their hairstyle
+# path is never read: hair_sim_step_profile generates its strips.)
 /usr/bin/python3 - "$ROOT/config/hair_sim.yaml" "$WORK" <<'EOF'
 import os, sys
 src, out = sys.argv[1], sys.argv[2]
 text = open(src).read()
-style = "hairstyle: hairstyles/default.yaml"
-assert style in text, "config/hair_sim.yaml: no '%s' line" % style
-text = text.replace(style, "hairstyle: " + os.path.join(os.path.dirname(src), "hairstyles/default.yaml"))
 cut = text.index("\nbodies:")
 settings, bodies = text[:cut], text[cut:]
 lines = bodies.split("\n")
