@@ -4,13 +4,14 @@
 # usage (after set -euo pipefail): ab_build OLD_COMMIT TARGET
 # (step_parts.sh uses release_configure alone.)
 
-# Configures the source tree SRC for a Release build in BUILD (as ./run.sh bench does; log in BUILD.cmake.log),
+# Configures the source tree SRC for a Release build in BUILD (as ./run.sh bench does, log in BUILD/cmake.log),
 # or exits 1 naming the log; $name names the calling script.
 release_configure() {
   local src="$1" build="$2"
+  mkdir -p "$build"
   cmake -S "$src" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCATKIN_DEVEL_PREFIX="$build/devel" \
-    -DCATKIN_ENABLE_TESTING=OFF >"$build.cmake.log" 2>&1 || {
-    echo "$name: cmake failed for $src (see $build.cmake.log)" >&2
+    -DCATKIN_ENABLE_TESTING=OFF >"$build/cmake.log" 2>&1 || {
+    echo "$name: cmake failed for $src (see $build/cmake.log)" >&2
     exit 1
   }
 }
@@ -33,7 +34,6 @@ ab_build() {
     git -C "$ROOT" worktree prune
     git -C "$ROOT" worktree add -q --detach "$AB_DIR/src" "$OLD"
   fi
-  mkdir -p "$AB_DIR/build" "$ROOT/build-release"
   local pair
   for pair in "$AB_DIR/src:$AB_DIR/build" "$ROOT:$ROOT/build-release"; do
     release_configure "${pair%%:*}" "${pair#*:}"

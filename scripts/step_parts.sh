@@ -31,7 +31,6 @@ CORE=${AB_CORE:-1}
 name=step_parts.sh
 # shellcheck source=scripts/ab_build.sh
 . "$(dirname "$0")/ab_build.sh"
-mkdir -p "$ROOT/build-release"
 release_configure "$ROOT" "$ROOT/build-release"
 cmake --build "$ROOT/build-release" -j"$(nproc)" --target hair_sim_step_profile >/dev/null
 BIN="$ROOT/build-release/devel/lib/hair_sim/hair_sim_step_profile"
