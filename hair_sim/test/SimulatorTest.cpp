@@ -3,12 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -340,6 +342,20 @@ std::vector<Vec3> runInWind(const Hairstyle& style, const PhysicsParameters& p, 
   return sim.positionsHead();
 }
 
+/// The head's rest pose in these tests: 1.6 m above the world's origin.
+Iso3 headRest() {
+  Iso3 rest = Iso3::Identity();
+  rest.translation() = Vec3(0.0, 0.0, 1.6);
+  return rest;
+}
+
+/// `strips` strips generated for `config` about the head at rest (headRest).
+Hairstyle generatedHairstyle(const SimConfig& config, int strips) {
+  GeneratorOptions generated;
+  generated.strips = strips;
+  return generateHairstyle(config, headRest(), generated);
+}
+
 /// measures: the spring measures after the last substep (minSpringRatio and maxSpringRatio within and
 /// between strips, minStripGap).
 std::vector<Vec3> runPath(Simulator::StepPath path, int steps, double amplitude, long* exact_strips = nullptr,
@@ -494,16 +510,55 @@ TEST(SimulatorTest, HelperThreadsGiveTheSameBits) {
   EXPECT_EQ(exact1, exact3);
 }
 
+TEST(SimulatorTest, SweepGroupsShareNoSpringPair) {
+  // On 2 threads the first two sweep groups are swept at once (Simulator::sweepGroupOf): a spring pair
+  // between them would be kept from both threads at once, so there must be none. Group 0 lies in the first
+  // half of the blocks of chains and group 1 in the second, and chains go into blocks in strip order, so
+  // every strip of group 0 comes before every strip of group 1. 600 generated strips (the hairstyle of
+  // HelperThreadsGiveTheSameBits): both groups and the boundary are there, and the boundary, the part no
+  // second thread shares, is a minority.
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  const Simulator sim(generatedHairstyle(config, 600), config.physics, config.bodies);
+  const std::size_t strips = sim.hairstyle().strips.size();
+  ASSERT_GT(strips, 500u);  // (the generator places 599)
+  std::vector<int> group(strips);
+  int count[3] = {0, 0, 0};
+  std::size_t last0 = 0, first1 = strips;
+  for (std::size_t s = 0; s < strips; ++s) {
+    group[s] = sim.sweepGroupOf(s);
+    ASSERT_GE(group[s], 0);
+    ASSERT_LE(group[s], 2);
+    ++count[group[s]];
+    if (group[s] == 0) last0 = s;
+    if (group[s] == 1) first1 = std::min(first1, s);
+  }
+  EXPECT_LT(last0, first1);
+  EXPECT_GT(count[0], 100);
+  EXPECT_GT(count[1], 100);
+  EXPECT_GT(count[2], 0);
+  EXPECT_LT(count[2], static_cast<int>(strips / 2));
+  std::vector<int> strip_of(static_cast<std::size_t>(sim.controlPointCount()));
+  for (std::size_t s = 0; s < strips; ++s)
+    for (int p = 0; p < sim.hairstyle().strips[s].pointCount(); ++p)
+      strip_of[static_cast<std::size_t>(sim.stripOffsets()[s] + p)] = static_cast<int>(s);
+  int between = 0;
+  for (const SpringPair& pair : sim.springs()) {
+    const int ga = group[static_cast<std::size_t>(strip_of[static_cast<std::size_t>(pair.a)])];
+    const int gb = group[static_cast<std::size_t>(strip_of[static_cast<std::size_t>(pair.b)])];
+    EXPECT_FALSE((ga == 0 && gb == 1) || (ga == 1 && gb == 0)) << "pair " << pair.a << "-" << pair.b;
+    between += pair.within_strip ? 0 : 1;
+  }
+  EXPECT_GT(between, 1000);  // (the groups are not apart for want of pairs)
+  EXPECT_THROW(sim.sweepGroupOf(strips), std::out_of_range);
+}
+
 TEST(SimulatorTest, PathSwitchesAndResetKeepTheBitsOnEveryThreadCount) {
   // The Lanes paths swap the state with their buffers; the Exact path works in the state alone. Switching
   // between them mid-run, and reset() in between, give the same hair on 1, 2 and 3 threads, and a run after
   // reset() is a fresh run's. 600 generated strips: the helpers take part.
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
-  Iso3 rest = Iso3::Identity();
-  rest.translation() = Vec3(0.0, 0.0, 1.6);
-  GeneratorOptions generated;
-  generated.strips = 600;
-  const Hairstyle style = generateHairstyle(config, rest, generated);
+  const Iso3 rest = headRest();
+  const Hairstyle style = generatedHairstyle(config, 600);
   auto drive = [&](Simulator& sim, HeadMotionEstimator& head, int from, int to) {
     for (int i = from; i < to; ++i)
       sim.step(shakeInputs(config, rest, i, 1.0, head, sim.parameters().substep));

@@ -1,10 +1,11 @@
 #pragma once
 /// Internal to the core: the helper threads of Simulator::setThreads. Each substep hands them parts of the
-/// spring pairs to scan (computeSpringForces, each part into its own outputs) and, on the Lanes path, its
-/// blocks of chains (lanes::stepBlock, which reads only the block's own chains at the start of
-/// the substep and writes only their new state); the calling thread commits the strips in order as their
-/// blocks complete and computes blocks itself while it waits. Which thread computes a block does not change
-/// its result, so the hair is the same bit for bit with any number of threads.
+/// spring pairs to scan (computeSpringForces, each part into its own outputs) and, on the Lanes path, the
+/// sweep of the second group of strips (Simulator::stepLanes: the two groups share no spring pair and no
+/// block of chains, so they are swept at once), with the runs of blocks of chains (lanes::stepBlock, which
+/// reads only the block's own chains at the start of the substep and writes only their new state) shared
+/// between the two sweeps. Which thread computes a block does not change its result, and the sweep order does
+/// not depend on the threads, so the hair is the same bit for bit with any number of threads.
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
@@ -34,6 +35,30 @@ class LaneWorkers {
   /// Returns once every block is computed and every helper is idle again.
   void finish();
 
+  /// The runs of blocks of two groups swept at once (Simulator::stepLanes): each group's own sweep claims its
+  /// runs from the front as it reads its strips; the other sweep, once done with its own group, claims the
+  /// rest from the back. Which thread computes a run does not change its result. startRuns resets the claims
+  /// for a substep with runs[g] runs in group g (before start()).
+  void startRuns(std::size_t runs0, std::size_t runs1);
+  /// Claims the next unclaimed run of group g from its front (or back); false when none is left.
+  bool claimRun(int g, bool from_back, std::size_t& run);
+  /// Marks run `run` of group g computed (by the thread that claimed it).
+  void markRunDone(int g, std::size_t run);
+  /// Returns once run `run` of group g is computed (another thread claimed it).
+  void waitRunDone(int g, std::size_t run);
+  /// The balance of the two sweeps, learned from substep to substep (it decides only which thread computes
+  /// which run, never a result): `lend` runs of group 1 are computed by group 0's sweep as it goes (spread
+  /// over its strips), or for lend < 0, -lend runs of group 0 by group 1's sweep. After each substep
+  /// settle() moves it by half the runs that would have evened the two sweeps' ends.
+  struct Balance {
+    int lend = 0;
+    double run_seconds = 0.0;  ///< a run's time, as last measured
+  };
+  Balance balance;
+  /// The balance's update from the two sweeps' ends (seconds; each sweep's own strips and the runs it lent)
+  /// and the time of the runs computed for the other group (`lent` of them).
+  void settle(double end0, double end1, double lent_seconds, int lent, int runs0, int runs1);
+
  private:
   void loop();
   /// Claims and computes the next block; false when none is left.
@@ -52,6 +77,13 @@ class LaneWorkers {
   std::unique_ptr<std::atomic<long>[]> done_;  ///< per block: the generation in which it was computed
   std::size_t done_size_ = 0;
   std::atomic<int> busy_{0};  ///< helpers inside the current substep
+  struct RunGroup {
+    std::size_t front = 0, back = 0;            // the unclaimed runs [front, back), guarded by mutex_
+    std::unique_ptr<std::atomic<long>[]> done;  ///< per run: the run generation in which it was computed
+    std::size_t done_size = 0;
+  };
+  RunGroup run_groups_[2];
+  long run_generation_ = 0;  ///< startRuns calls (written before start(), read after its release)
 };
 
 }  // namespace hair_sim

@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 #include <unordered_map>
@@ -149,7 +151,8 @@ void Simulator::buildChains() {
     }
     offset += s.pointCount();
   }
-  exact_placed_.reserve(largest);  // (stepStrip's push_back never reallocates)
+  for (SweepScratch& w : scratch_)
+    w.exact_placed.reserve(largest);  // (stepStrip's push_back never reallocates)
   updateSegmentConstants();
   buildLanes();
 }
@@ -200,7 +203,6 @@ void Simulator::buildLanes() {
   new_rate_.assign(n, Vec3::Zero());
   new_velocity_.assign(n, Vec3::Zero());
   strip_committed_.assign(hairstyle_.strips.size(), -1);
-  strip_exact_from_.assign(hairstyle_.strips.size(), kNoExact);
 }
 
 namespace {
@@ -216,7 +218,7 @@ const char* Simulator::kernelInstructionSet(StepPath path) {
   return path == StepPath::Exact ? "none" : lanes::kernelName(laneIsa(path));
 }
 
-void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally) {
+void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
   constexpr int W = lanes::kLanes;
   const std::size_t nb = bodies_.size();
   lane_bodies_.resize(margins_.size() * nb);
@@ -242,7 +244,6 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
         lb.slow[l] = bound.motion < 0.5 ? -1 : 0;
       }
     }
-  std::fill(strip_exact_from_.begin(), strip_exact_from_.end(), kNoExact);
 
   lanes::BlockJob job;
   job.dt = f.dt, job.k = f.k, job.gamma = f.gamma, job.drag = f.drag;
@@ -286,112 +287,193 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f, StepTally& t
     std::copy(j.first_flagged_row, j.first_flagged_row + W, &block_flags_[blk * W]);
     std::copy(j.max_rate2, j.max_rate2 + W, &chain_max_rate2_[blk * W]);
   };
-  // The exact step takes over at the first flagged place of the strip in its sweep order (column by
-  // column, root to tip): the places before it are the lanes'. Blocks are read in order, each once all its
-  // lanes are computed (by the helpers, or here in runs of kBlocksPerRun).
-  // Helpers only for hairstyles of kMinBlocksForHelpers blocks or more: below, waking them costs more than
-  // they save (BM_Step2Threads/100: 0.5-1.1 x).
+  // Helpers only for hairstyles of kMinBlocksForHelpers blocks or more: below, waking one costs more than it
+  // saves (BM_Step2Threads/100: 0.5-1.1 x).
   LaneWorkers* workers = blocks >= kMinBlocksForHelpers ? workers_.get() : nullptr;
-  std::size_t read_blocks = 0, run_blocks = 0;
-  auto readBlocksThrough = [&](std::size_t last) {
-    for (; read_blocks <= last && read_blocks < blocks; ++read_blocks) {
-      const std::size_t blk = read_blocks;
-      if (workers) {
-        workers->waitFor(blk);
-      } else if (blk >= run_blocks) {
-        // The blocks in runs of kBlocksPerRun, each just before its strips are read: the kernel's code stays
-        // warm through a run, and the run's results are still in the cache for the band check and the exact
-        // step.
-        const std::size_t end = std::min(blocks, blk + kBlocksPerRun);
-        for (; run_blocks < end; ++run_blocks) runBlock(run_blocks);
-      }
-      const int* strips = &lane_strip_[blk * W];
-      for (int l = 0; l < W; ++l) {
-        if (strips[l] < 0) continue;
-        const std::size_t si = static_cast<std::size_t>(strips[l]);
-        if (block_margin_[blk] < 0) {
-          strip_exact_from_[si] = 0;
-          continue;
-        }
-        const int flagged = block_flags_[blk * W + static_cast<std::size_t>(l)];
-        if (!flagged) continue;
-        const int column = lane_point_[blk * stride + static_cast<std::size_t>(l)] - strip_offset_[si];
-        strip_exact_from_[si] =
-            std::min(strip_exact_from_[si], column * hairstyle_.strips[si].rows + flagged);
-      }
-    }
+  // One group of the sweep order (buildSweepOrder) on one thread: its strips in that order, each once the
+  // blocks through its last one are computed. The group's blocks [block_begin, block_end) are computed in
+  // runs of kBlocksPerRun, each just before its strips are read: the kernel's code stays warm through a run,
+  // and the run's results are still in the cache for the band check and the exact step. (On 2 threads the
+  // other group's sweep computes some of them from the back as it goes, as many as LaneWorkers::Balance
+  // says, and once done the rest not yet claimed: which thread computes a run does not change the bits.)
+  // A strip is committed from the lanes when the spring band holds at its new places (what
+  // resolveCollisions and the sweep's band check would act on) for its pairs within the strip and with the
+  // strips before it in the sweep order, already final (with 1e-9 relative to spare; pairs with a root are
+  // never moved, so never kept); otherwise it takes the exact step, which, like the lanes, sees the strips
+  // after it as not yet moved. So both paths take the same decisions. The two groups share no spring pair
+  // and no block, so they may be swept at once; the boundary (g = 2, no blocks of its own) comes after both.
+  auto runOfBlocks = [&](std::size_t block_begin, std::size_t block_end, std::size_t run) {
+    const std::size_t end = std::min(block_end, block_begin + (run + 1) * kBlocksPerRun);
+    for (std::size_t blk = block_begin + run * kBlocksPerRun; blk < end; ++blk) runBlock(blk);
   };
-  // The helpers hold references into this frame: they are done before it ends, whatever happens.
-  struct FinishHelpers {
-    LaneWorkers* workers;
-    ~FinishHelpers() {
-      if (workers) workers->finish();
-    }
-  } finish_helpers{workers};
-  if (workers)
-    workers->start(
-        blocks, [](void* run, std::size_t blk) { (*static_cast<decltype(runBlock)*>(run))(blk); }, &runBlock);
-
-  // In strip order, as the exact step goes: a strip is committed from the lanes when the spring band holds
-  // at its new places (what resolveCollisions and the sweep's band check would act on) for its pairs within
-  // the strip and with the earlier strips, already final (with 1e-9 relative to spare; pairs with a root are
-  // never moved, so never kept); otherwise it takes the exact step, which, like the lanes, sees the later
-  // strips as not yet moved. So both paths take the same decisions.
-  double max_rate2 = 0.0;
-  exact_strips_ = 0;
-  for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
-    readBlocksThrough(static_cast<std::size_t>(strip_last_block_[si]));
-    const Strip& s = hairstyle_.strips[si];
-    int from = strip_exact_from_[si];
-    const int base = strip_offset_[si];
-    // A band pair's |a - b|^2 in the lanes' buffers, kept for the next substep's spring scan as well. (An
-    // earlier strip's final place is there: its lanes' result, or its exact step's, copied there below.)
-    auto bandDist2 = [&](const BandPair& bp) {
-      const double dist2 = (new_position_[static_cast<std::size_t>(bp.later)] -
-                            new_position_[static_cast<std::size_t>(bp.earlier)])
-                               .squaredNorm();
-      spring_dist2_[static_cast<std::size_t>(bp.spring)] = dist2;
-      return dist2;
-    };
-    for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {
-      const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
-      const double dist2 = bandDist2(bp);
-      // Kept by the later point of the pair in the sweep; without a branch (the pairs outside come at
-      // random).
-      const bool outside = (dist2 < bp.near2) | (dist2 > bp.far2);
-      from = std::min(from, outside ? bp.key : kNoExact);
-    }
-    if (from != kNoExact) {
-      stepStrip(in, f, si, strip_offset_[si], tally, from, true);
-      ++exact_strips_;
-      // Its state at the end of the substep into the lanes' buffers, which become the state below (the
-      // helpers are done with its blocks: they were read above): the points the exact step placed, or the
-      // whole strip after relaxStrip. The points committed from the lanes are there already, and so are the
-      // roots, which no substep writes (syncLaneBuffers made them equal in both).
-      const auto copyBack = [this](std::size_t i) {
-        new_position_[i] = positions_[i];
-        new_direction_[i] = direction_[i];
-        new_rate_[i] = rate_[i];
-        new_velocity_[i] = velocity_[i];
-      };
-      if (exact_relaxed_) {
-        for (int p = 0; p < s.pointCount(); ++p) copyBack(static_cast<std::size_t>(base + p));
-      } else {
-        for (int i : exact_placed_) copyBack(static_cast<std::size_t>(i));
+  const std::size_t mid = sweep_mid_block_;
+  const std::size_t runs0 = (mid + kBlocksPerRun - 1) / kBlocksPerRun;
+  const std::size_t runs1 = (blocks - mid + kBlocksPerRun - 1) / kBlocksPerRun;
+  struct Lending {
+    int quota = 0;  // runs of the other group to compute
+    int lent = 0;
+    double seconds = 0.0;
+    std::chrono::steady_clock::time_point end;  // of the sweep's own strips and the runs it lent
+  } lendings[2];
+  auto sweepGroup = [&](SweepScratch& w, int g, std::size_t order_begin, std::size_t order_end,
+                        std::size_t block_begin, std::size_t block_end) {
+    const std::size_t runs = (block_end - block_begin + kBlocksPerRun - 1) / kBlocksPerRun;
+    std::size_t ready = 0;  // runs [0, ready) of the group are computed
+    auto computeThrough = [&](std::size_t run) {
+      for (; ready <= run && ready < runs; ++ready) {
+        std::size_t claimed = ready;
+        if (!workers || g == 2) {
+          runOfBlocks(block_begin, block_end, ready);
+        } else if (workers->claimRun(g, false, claimed)) {  // (the front: the next run, ready)
+          runOfBlocks(block_begin, block_end, claimed);
+          workers->markRunDone(g, claimed);
+        } else {
+          workers->waitRunDone(g, ready);  // the other sweep claimed it from the back
+        }
       }
-      for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q)  // its pairs' final lengths
-        bandDist2(band_pairs_[static_cast<std::size_t>(q)]);
-      continue;
+    };
+    double max_rate2 = 0.0;
+    // On 2 threads, the runs of the other group this sweep computes as it goes (LaneWorkers::Balance),
+    // spread over its strips, from the other group's back.
+    Lending& lending = lendings[g < 2 ? g : 0];
+    const std::size_t count = order_end - order_begin;
+    for (std::size_t rank = order_begin; rank < order_end; ++rank) {
+      const std::size_t si = static_cast<std::size_t>(sweep_order_[rank]);
+      if (g < 2 && lending.quota > 0) {
+        const std::size_t due = static_cast<std::size_t>(lending.quota) * (rank - order_begin + 1) / count;
+        std::size_t run;
+        while (static_cast<std::size_t>(lending.lent) < due && workers->claimRun(1 - g, true, run)) {
+          const auto t0 = std::chrono::steady_clock::now();
+          if (g == 0)
+            runOfBlocks(mid, blocks, run);
+          else
+            runOfBlocks(0, mid, run);
+          workers->markRunDone(1 - g, run);
+          lending.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          ++lending.lent;
+        }
+      }
+      if (runs > 0)
+        computeThrough((static_cast<std::size_t>(strip_last_block_[si]) - block_begin) / kBlocksPerRun);
+      const Strip& s = hairstyle_.strips[si];
+      const int base = strip_offset_[si];
+      // The exact step takes over at the first flagged place of the strip in its sweep (column by column,
+      // root to tip): the places before it are the lanes'. A block of mixed margins is all exact.
+      int from = kNoExact;
+      const std::size_t chain0 = static_cast<std::size_t>(strip_first_chain_[si]);
+      for (int c = 0; c < s.columns; ++c) {
+        const std::size_t ch = chain0 + static_cast<std::size_t>(c);
+        if (block_margin_[ch / W] < 0) {
+          from = 0;
+          break;
+        }
+        const int flagged = block_flags_[ch];
+        if (flagged) from = std::min(from, c * s.rows + flagged);
+      }
+      // A band pair's |a - b|^2 in the lanes' buffers, kept for the next substep's spring scan as well. (An
+      // earlier strip's final place is there: its lanes' result, or its exact step's, copied there below.)
+      auto bandDist2 = [&](const BandPair& bp) {
+        const double dist2 = (new_position_[static_cast<std::size_t>(bp.later)] -
+                              new_position_[static_cast<std::size_t>(bp.earlier)])
+                                 .squaredNorm();
+        spring_dist2_[static_cast<std::size_t>(bp.spring)] = dist2;
+        return dist2;
+      };
+      for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {
+        const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
+        const double dist2 = bandDist2(bp);
+        // Kept by the later point of the pair in the sweep; without a branch (the pairs outside come at
+        // random).
+        const bool outside = (dist2 < bp.near2) | (dist2 > bp.far2);
+        from = std::min(from, outside ? bp.key : kNoExact);
+      }
+      if (from != kNoExact) {
+        stepStrip(w, in, f, si, base, w.tally, from, true);
+        ++w.exact_strips;
+        // Its state at the end of the substep into the lanes' buffers, which become the state below (its
+        // blocks are computed): the points the exact step placed, or the whole strip after relaxStrip. The
+        // points committed from the lanes are there already, and so are the roots, which no substep writes
+        // (syncLaneBuffers made them equal in both).
+        const auto copyBack = [this](std::size_t i) {
+          new_position_[i] = positions_[i];
+          new_direction_[i] = direction_[i];
+          new_rate_[i] = rate_[i];
+          new_velocity_[i] = velocity_[i];
+        };
+        if (w.exact_relaxed) {
+          for (int p = 0; p < s.pointCount(); ++p) copyBack(static_cast<std::size_t>(base + p));
+        } else {
+          for (int i : w.exact_placed) copyBack(static_cast<std::size_t>(i));
+        }
+        for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q)  // its pairs' final lengths
+          bandDist2(band_pairs_[static_cast<std::size_t>(q)]);
+        continue;
+      }
+      // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
+      strip_committed_[si] = sweep_;
+      for (int c = 0; c < s.columns; ++c)
+        max_rate2 = std::max(max_rate2, chain_max_rate2_[chain0 + static_cast<std::size_t>(c)]);
     }
-    // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
-    strip_committed_[si] = sweep_;
-    const std::size_t chain = static_cast<std::size_t>(strip_first_chain_[si]);
-    for (int c = 0; c < s.columns; ++c) max_rate2 = std::max(max_rate2, chain_max_rate2_[chain + c]);
+    if (runs > 0) computeThrough(runs - 1);  // the runs of boundary strips alone
+    if (g < 2) lending.end = std::chrono::steady_clock::now();
+    w.tally.max_rate2 = std::max(w.tally.max_rate2, max_rate2);
+  };
+  const std::size_t end0 = sweep_group_end_[0], end1 = sweep_group_end_[1], end2 = sweep_group_end_[2];
+  if (workers) {
+    // The second group on a helper (or here, if none has taken it by the time the first is done); each sweep,
+    // once done, computes the other group's unclaimed runs.
+    struct SecondGroup {
+      decltype(sweepGroup)* sweep;
+      decltype(runOfBlocks)* run;
+      LaneWorkers* workers;
+      SweepScratch* w;
+      std::size_t order_begin, order_end, mid, blocks;
+      std::exception_ptr error;
+    } second{&sweepGroup, &runOfBlocks, workers, &scratch_[1], end0, end1, mid, blocks, nullptr};
+    // The helper holds references into this frame: it is done before it ends, whatever happens.
+    struct FinishHelpers {
+      LaneWorkers* workers;
+      ~FinishHelpers() { workers->finish(); }
+    } finish_helpers{workers};
+    workers->startRuns(runs0, runs1);
+    const int lend = workers->balance.lend;
+    lendings[0].quota = std::max(lend, 0);
+    lendings[1].quota = std::max(-lend, 0);
+    const auto start = std::chrono::steady_clock::now();
+    workers->start(
+        1,
+        [](void* context, std::size_t) {
+          SecondGroup& g = *static_cast<SecondGroup*>(context);
+          try {
+            (*g.sweep)(*g.w, 1, g.order_begin, g.order_end, g.mid, g.blocks);
+            std::size_t run;
+            while (g.workers->claimRun(0, true, run)) {
+              (*g.run)(0, g.mid, run);
+              g.workers->markRunDone(0, run);
+            }
+          } catch (...) {
+            g.error = std::current_exception();
+          }
+        },
+        &second);
+    sweepGroup(scratch_[0], 0, 0, end0, 0, mid);
+    std::size_t run;
+    while (workers->claimRun(1, true, run)) {
+      runOfBlocks(mid, blocks, run);
+      workers->markRunDone(1, run);
+    }
+    workers->waitFor(0);
+    if (second.error) std::rethrow_exception(second.error);
+    auto since = [&](const Lending& l) { return std::chrono::duration<double>(l.end - start).count(); };
+    workers->settle(since(lendings[0]), since(lendings[1]), lendings[0].seconds + lendings[1].seconds,
+                    lendings[0].lent + lendings[1].lent, static_cast<int>(runs0), static_cast<int>(runs1));
+  } else {
+    sweepGroup(scratch_[0], 0, 0, end0, 0, mid);
+    sweepGroup(scratch_[1], 1, end0, end1, mid, blocks);
   }
-  tally.max_rate2 = std::max(tally.max_rate2, max_rate2);
+  sweepGroup(scratch_[0], 2, end1, end2, blocks, blocks);  // the boundary, after both
   // The lanes' buffers hold every strip's state at the end of the substep: they become the state (no copy of
-  // the strips committed from the lanes). The helpers are done with them first.
-  if (workers) workers->finish();
+  // the strips committed from the lanes).
   positions_.swap(new_position_);
   direction_.swap(new_direction_);
   rate_.swap(new_rate_);
@@ -697,7 +779,44 @@ void Simulator::buildSprings() {
   buildBandPairs();
 }
 
+void Simulator::buildSweepOrder() {
+  constexpr int W = lanes::kLanes;
+  const std::size_t n = hairstyle_.strips.size();
+  const std::size_t blocks = block_rows_.size();
+  sweep_mid_block_ = blocks / 2;
+  // Per strip: 0 with all its chains in the blocks before the middle one, 1 from it on, 2 both (boundary).
+  std::vector<char> group(n, 2);
+  for (std::size_t si = 0; si < n; ++si) {
+    const std::size_t first = static_cast<std::size_t>(strip_first_chain_[si]) / W;
+    const std::size_t last = static_cast<std::size_t>(strip_last_block_[si]);
+    group[si] = last < sweep_mid_block_ ? 0 : first >= sweep_mid_block_ ? 1 : 2;
+  }
+  // A pair between the halves puts both its strips in the boundary (a pair with a boundary strip does not:
+  // that strip comes after both groups).
+  std::vector<char> boundary(n, 0);
+  for (const SpringPair& p : springs_) {
+    const std::size_t a = static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(p.a)]);
+    const std::size_t b = static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(p.b)]);
+    if (group[a] != 2 && group[b] != 2 && group[a] != group[b]) boundary[a] = boundary[b] = 1;
+  }
+  for (std::size_t si = 0; si < n; ++si)
+    if (boundary[si]) group[si] = 2;
+  sweep_order_.clear();
+  for (char g = 0; g < 3; ++g) {
+    for (std::size_t si = 0; si < n; ++si)
+      if (group[si] == g) sweep_order_.push_back(static_cast<int>(si));
+    sweep_group_end_[static_cast<std::size_t>(g)] = sweep_order_.size();
+  }
+  strip_rank_.assign(n, 0);
+  for (std::size_t r = 0; r < n; ++r)
+    strip_rank_[static_cast<std::size_t>(sweep_order_[r])] = static_cast<int>(r);
+  partner_rank_.resize(partner_strip_.size());
+  for (std::size_t q = 0; q < partner_strip_.size(); ++q)
+    partner_rank_[q] = strip_rank_[static_cast<std::size_t>(partner_strip_[q])];
+}
+
 void Simulator::buildBandPairs() {
+  buildSweepOrder();
   // Per strip, the spring pairs whose later point in the sweep is in it, neither point a root (roots never
   // move, so the exact step never keeps such a pair), with the squared edges of the hard band (the contact
   // edge and the far edge; 1e-9 relative to spare).
@@ -720,8 +839,13 @@ void Simulator::buildBandPairs() {
     }
     BandPair bp;
     bp.spring = static_cast<int>(k);
-    bp.later = std::max(p.a, p.b);  // points are numbered strip by strip
-    bp.earlier = std::min(p.a, p.b);
+    // The later point: of the strip later in the sweep order, or within one strip the later in its numbering
+    // (the sweep keys below decide the place where the pair is kept).
+    const int rank_a = strip_rank_[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(p.a)])];
+    const int rank_b = strip_rank_[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(p.b)])];
+    const bool a_later = rank_a != rank_b ? rank_a > rank_b : p.a > p.b;
+    bp.later = a_later ? p.a : p.b;
+    bp.earlier = a_later ? p.b : p.a;
     bp.near2 = (lo * p.rest) * (lo * p.rest) * (1.0 + 1e-9);
     bp.far2 = p.within_strip ? (hi * p.rest) * (hi * p.rest) * (1.0 - 1e-9)
                              : std::numeric_limits<double>::infinity();
@@ -924,7 +1048,7 @@ double pathClearance(const Vec3& q0, double c0, const Vec3& q1) {
 
 }  // namespace
 
-void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_end,
+void Simulator::prepareBodies(SweepScratch& w, const Vec3& pivot, double d, const Vec3& previous_end,
                               const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
   const std::size_t nb = now.size();
   // In the sphere space of body b the end of direction u is q_pivot + d Sinv u, so the pivot and the
@@ -932,16 +1056,16 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
   // end, every segment and every path from the previous end (centre q_pivot, radius
   // max(d / smallest radius, |q_prev - q_pivot|)) lies outside the unit sphere: then nothing below
   // can fail for it, and it is skipped.
-  near_.clear();
-  prepared_previous_end_ = previous_end;
-  if (is_near_.size() != nb) {  // every entry is set below
-    is_near_.resize(nb);
-    q_pivot_.resize(nb);
-    q_prev_.resize(nb);
-    c_pivot_.resize(nb);
-    c_prev_.resize(nb);
-    pivot_inside_.resize(nb);
-    near_.reserve(nb);
+  w.near.clear();
+  w.prepared_previous_end = previous_end;
+  if (w.is_near.size() != nb) {  // every entry is set below
+    w.is_near.resize(nb);
+    w.q_pivot.resize(nb);
+    w.q_prev.resize(nb);
+    w.c_pivot.resize(nb);
+    w.c_prev.resize(nb);
+    w.pivot_inside.resize(nb);
+    w.near.reserve(nb);
   }
   // First a test in the head frame without the sphere-space maps: with D the distance from the pivot to
   // the centre of the ball of radius R that holds the body, every end and segment lies within d of the
@@ -949,11 +1073,11 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
   // + c_now (M = S_now Sinv_before) to the end, where |p' - pivot| <= a + shift + motion (a + D + shift)
   // with a = |prev - pivot|. So the body is out of reach when D > R + d and D (1 - motion) > R + (a +
   // shift)(1 + motion) (compared on squares); R keeps a relative 1e-6 and 1 um to spare.
-  const bool quick = bounds_ != nullptr && bounds_->size() == nb;
+  const bool quick = w.bounds != nullptr && w.bounds->size() == nb;
   const double a = (quick && !before.empty()) ? (previous_end - pivot).norm() : 0.0;
   for (std::size_t b = 0; b < nb; ++b) {
     if (quick) {
-      const BodyBound& bound = (*bounds_)[b];
+      const BodyBound& bound = (*w.bounds)[b];
       const double dist2 = (pivot - bound.centre).squaredNorm();
       const double reach = bound.radius + d;
       if (dist2 > reach * reach) {
@@ -967,97 +1091,98 @@ void Simulator::prepareBodies(const Vec3& pivot, double d, const Vec3& previous_
           }
         }
         if (far) {
-          pivot_inside_[b] = 0;
-          is_near_[b] = 0;
+          w.pivot_inside[b] = 0;
+          w.is_near[b] = 0;
           continue;
         }
       }
     }
     const Vec3 qp = now[b].toSphere(pivot);
-    q_pivot_[b] = qp;
+    w.q_pivot[b] = qp;
     const double n2 = qp.squaredNorm();
-    pivot_inside_[b] = n2 < 1.0;
+    w.pivot_inside[b] = n2 < 1.0;
     // Out of reach when |q_pivot| > 1 + max(reach_end, |q_prev - q_pivot|) + 1e-9, tested on squares (a
     // square root only when the first part holds).
     const double lim = 1.0 + d / now[b].radii().minCoeff() + 1e-9;
     bool far = n2 > lim * lim;
     if (!before.empty()) {
-      q_prev_[b] = before[b].toSphere(previous_end);
+      w.q_prev[b] = before[b].toSphere(previous_end);
       if (far) {
         const double spare = std::sqrt(n2) - 1.0 - 1e-9;
-        far = (q_prev_[b] - qp).squaredNorm() < spare * spare;
+        far = (w.q_prev[b] - qp).squaredNorm() < spare * spare;
       }
     }
-    is_near_[b] = far ? 0 : 1;
+    w.is_near[b] = far ? 0 : 1;
     if (far) continue;
-    c_pivot_[b] = n2 - 1.0;
-    if (!before.empty()) c_prev_[b] = q_prev_[b].squaredNorm() - 1.0;
-    near_.push_back(b);
+    w.c_pivot[b] = n2 - 1.0;
+    if (!before.empty()) w.c_prev[b] = w.q_prev[b].squaredNorm() - 1.0;
+    w.near.push_back(b);
   }
 }
 
-Vec3 Simulator::endInSphere(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now) const {
-  return q_pivot_[b] + d * (now[b].Sinv() * u);
+Vec3 Simulator::endInSphere(const SweepScratch& w, std::size_t b, double d, const Vec3& u,
+                            const std::vector<Ellipsoid>& now) const {
+  return w.q_pivot[b] + d * (now[b].Sinv() * u);
 }
 
-int Simulator::failedKind(std::size_t b, const Vec3& q_end, bool have_before) const {
+int Simulator::failedKind(const SweepScratch& w, std::size_t b, const Vec3& q_end, bool have_before) const {
   if (q_end.squaredNorm() - 1.0 <= 1e-12) return 0;
-  if (pivot_inside_[b] || clear_level_ >= 2) return -1;  // a root inside its scalp: only the end counts
-  if (pathEntersUnitSphere(q_pivot_[b], c_pivot_[b], q_end)) return 1;  // the segment cuts through
-  if (have_before && clear_level_ == 0 && pathEntersUnitSphere(q_prev_[b], c_prev_[b], q_end)) return 2;
+  if (w.pivot_inside[b] || w.clear_level >= 2) return -1;  // a root inside its scalp: only the end counts
+  if (pathEntersUnitSphere(w.q_pivot[b], w.c_pivot[b], q_end)) return 1;  // the segment cuts through
+  if (have_before && w.clear_level == 0 && pathEntersUnitSphere(w.q_prev[b], w.c_prev[b], q_end)) return 2;
   return -1;
 }
 
-bool Simulator::clearOf(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
-                        bool have_before) const {
-  return !is_near_[b] || failedKind(b, endInSphere(b, d, u, now), have_before) < 0;
+bool Simulator::clearOf(const SweepScratch& w, std::size_t b, double d, const Vec3& u,
+                        const std::vector<Ellipsoid>& now, bool have_before) const {
+  return !w.is_near[b] || failedKind(w, b, endInSphere(w, b, d, u, now), have_before) < 0;
 }
 
-double Simulator::testMargin(std::size_t b, int kind, const Vec3& q_end) const {
+double Simulator::testMargin(const SweepScratch& w, std::size_t b, int kind, const Vec3& q_end) const {
   if (kind == 0) return (q_end.squaredNorm() - 1.0) - 1e-12;
-  return kind == 1 ? pathClearance(q_pivot_[b], c_pivot_[b], q_end)
-                   : pathClearance(q_prev_[b], c_prev_[b], q_end);
+  return kind == 1 ? pathClearance(w.q_pivot[b], w.c_pivot[b], q_end)
+                   : pathClearance(w.q_prev[b], w.c_prev[b], q_end);
 }
 
-Simulator::EscapeProbe Simulator::probeEscape(double d, const Vec3& u, const std::vector<Ellipsoid>& now,
-                                              bool have_before, std::size_t follow_body,
-                                              int follow_kind) const {
+Simulator::EscapeProbe Simulator::probeEscape(const SweepScratch& w, double d, const Vec3& u,
+                                              const std::vector<Ellipsoid>& now, bool have_before,
+                                              std::size_t follow_body, int follow_kind) const {
   EscapeProbe p;
-  for (std::size_t b : near_) {
-    const Vec3 q_end = endInSphere(b, d, u, now);
-    if (b == follow_body && follow_kind >= 0) p.margin = testMargin(b, follow_kind, q_end);
+  for (std::size_t b : w.near) {
+    const Vec3 q_end = endInSphere(w, b, d, u, now);
+    if (b == follow_body && follow_kind >= 0) p.margin = testMargin(w, b, follow_kind, q_end);
     if (p.kind < 0) {
-      p.kind = failedKind(b, q_end, have_before);
+      p.kind = failedKind(w, b, q_end, have_before);
       p.body = b;
     }
   }
   return p;
 }
 
-bool Simulator::clearOfAll(double d, const Vec3& u, const std::vector<Ellipsoid>& now,
+bool Simulator::clearOfAll(const SweepScratch& w, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
                            bool have_before) const {
-  for (std::size_t b : near_)
-    if (!clearOf(b, d, u, now, have_before)) return false;
+  for (std::size_t b : w.near)
+    if (!clearOf(w, b, d, u, now, have_before)) return false;
   return true;
 }
 
-Vec3 Simulator::clearBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
-                            bool have_before, int first_level) {
+Vec3 Simulator::clearBodies(SweepScratch& w, const Vec3& pivot, double d, const Vec3& dir,
+                            const std::vector<Ellipsoid>& now, bool have_before, int first_level) {
   // Validity for one body: end outside, segment not cutting through it (pivot outside), and the end's
   // path over the substep, relative to the moving body, not entering it (the paper's ray test).
-  auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, have_before); };
-  clear_level_ = first_level;
+  auto validBodies = [&](const Vec3& u) { return clearOfAll(w, d, u, now, have_before); };
+  w.clear_level = first_level;
   Vec3 result = dir;
   if (!validBodies(dir)) {
-    ++collisions_;
-    result = escapeBodies(pivot, d, dir, now, have_before);
+    ++w.collisions;
+    result = escapeBodies(w, pivot, d, dir, now, have_before);
     // No direction passes every test (a crevice between bodies moving fast, where every end's path over
     // the substep crosses one): the end outside every body comes first, so the swept test goes, then the
     // segment test (the hard guarantee is on where the points are after the substep).
-    for (++clear_level_; clear_level_ <= 2 && !validBodies(result); ++clear_level_)
-      result = escapeBodies(pivot, d, result, now, have_before);
+    for (++w.clear_level; w.clear_level <= 2 && !validBodies(result); ++w.clear_level)
+      result = escapeBodies(w, pivot, d, result, now, have_before);
   }
-  clear_level_ = 0;
+  w.clear_level = 0;
   return result;
 }
 
@@ -1082,10 +1207,10 @@ const CircleStep* circleSteps() {
 }
 }  // namespace
 
-Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
+Vec3 Simulator::resolveCollisions(SweepScratch& w, int point, const Vec3& pivot, double d, const Vec3& dir,
                                   const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before) {
-  auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, !before.empty()); };
-  const Vec3 result = clearBodies(pivot, d, dir, now, !before.empty());
+  auto validBodies = [&](const Vec3& u) { return clearOfAll(w, d, u, now, !before.empty()); };
+  const Vec3 result = clearBodies(w, pivot, d, dir, now, !before.empty());
   // Spring band as a constraint: move the end into [contact, far] x rest length of each partner
   // (a few projection sweeps, the length to the pivot kept), if that keeps clear of the bodies.
   const int p_begin = partner_start_[static_cast<std::size_t>(point)];
@@ -1102,7 +1227,7 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
       for (int q = p_begin; q < p_end; ++q) {
         // Each pair is kept by the later of its two points in the sweep, against the final position
         // of the earlier one: partners not yet moved in this substep keep the pair themselves.
-        const Vec3* placed = placedPartner(static_cast<std::size_t>(q));
+        const Vec3* placed = placedPartner(w, static_cast<std::size_t>(q));
         if (!placed) continue;
         const Vec3& other = *placed;
         const Vec3 end = pivot + d * u;
@@ -1163,7 +1288,7 @@ Vec3 Simulator::resolveCollisions(int point, const Vec3& pivot, double d, const 
     Vec3 p = u;
     if (!project(p)) break;  // every band holds
     if (!validBodies(p)) {
-      p = escapeBodies(pivot, d, p, now, !before.empty());
+      p = escapeBodies(w, pivot, d, p, now, !before.empty());
       if (!validBodies(p)) break;
     } else if (settled) {
       // Every band holds at p (project's last sweep), which is clear: the next round's project(p) would
@@ -1198,11 +1323,11 @@ const std::vector<SphereDirection>& sphereDirections() {
 }
 }  // namespace
 
-Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
-                             bool have_before) const {
+Vec3 Simulator::escapeBodies(SweepScratch& w, const Vec3& pivot, double d, const Vec3& dir,
+                             const std::vector<Ellipsoid>& now, bool have_before) const {
   const std::size_t nb = now.size();
-  auto validFor = [&](std::size_t b, const Vec3& u) { return clearOf(b, d, u, now, have_before); };
-  auto validBodies = [&](const Vec3& u) { return clearOfAll(d, u, now, have_before); };
+  auto validFor = [&](std::size_t b, const Vec3& u) { return clearOf(w, b, d, u, now, have_before); };
+  auto validBodies = [&](const Vec3& u) { return clearOfAll(w, d, u, now, have_before); };
   // The valid direction closest to `dir` on the arc dir -> to (`to` valid): a bracket [lo blocked, hi clear]
   // narrowed until it is at most kEscapeTolerance wide (as the chord |hi - lo|), hi returned. The first
   // midpoint is the normalised sum of the ends, or by rotation for an arc near pi long; after it the arc is
@@ -1223,12 +1348,13 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
                           : Vec3(rotateByVector(0.5 * rotationVectorBetween(lo, hi), lo).normalized());
     (validBodies(half) ? hi : lo) = half;
     double width = (hi - lo).norm();
-    const EscapeProbe at_lo = width > kEscapeTolerance ? probeEscape(d, lo, now, have_before) : EscapeProbe{};
+    const EscapeProbe at_lo =
+        width > kEscapeTolerance ? probeEscape(w, d, lo, now, have_before) : EscapeProbe{};
     if (at_lo.kind >= 0) {  // (lo is blocked: always)
       std::size_t body = at_lo.body;
       int kind = at_lo.kind;
-      double f_lo = testMargin(body, kind, endInSphere(body, d, lo, now));
-      double f_hi = testMargin(body, kind, endInSphere(body, d, hi, now));
+      double f_lo = testMargin(w, body, kind, endInSphere(w, body, d, lo, now));
+      double f_hi = testMargin(w, body, kind, endInSphere(w, body, d, hi, now));
       const double eps = 0.5 * kEscapeTolerance;
       // The truncation k1 width^2 with k1 = 0.015 / (first width): 6.3-6.6 probes here at 100, 1,000 and
       // 10,000 strips of BM_Step's motion, against 7.8-8.1 with the paper's 0.2 (9.0-10.6 below 0.005).
@@ -1246,15 +1372,15 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
         const double x = std::abs(x_t - x_half) <= r ? x_t : x_half - sigma * r;
         const Vec3 mid = (lo + (x / width) * (hi - lo)).normalized();
         // The tests and the followed test's margin from one mapping of mid per body.
-        const EscapeProbe at = probeEscape(d, mid, now, have_before, body, kind);
+        const EscapeProbe at = probeEscape(w, d, mid, now, have_before, body, kind);
         if (at.kind < 0) {
           hi = mid, f_hi = at.margin;
         } else {
           lo = mid, f_lo = at.margin;
           if (f_lo >= 0.0) {  // lo passes the test followed so far: follow the one it fails
             body = at.body, kind = at.kind;
-            f_lo = testMargin(body, kind, endInSphere(body, d, lo, now));
-            f_hi = testMargin(body, kind, endInSphere(body, d, hi, now));
+            f_lo = testMargin(w, body, kind, endInSphere(w, body, d, lo, now));
+            f_hi = testMargin(w, body, kind, endInSphere(w, body, d, hi, now));
           }
         }
         width = (hi - lo).norm();
@@ -1276,7 +1402,7 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   Vec3 sum = Vec3::Zero();
   for (std::size_t b = 0; b < nb && count < 7; ++b) {
     if (validFor(b, dir)) continue;
-    cand[count] = pivot_inside_[b] ? now[b].closestPoint(pivot).normal : now[b].normalAt(pivot);
+    cand[count] = w.pivot_inside[b] ? now[b].closestPoint(pivot).normal : now[b].normalAt(pivot);
     sum += cand[count++];
   }
   if (count == 0) return dir;
@@ -1285,18 +1411,18 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
     if (validBodies(cand[c])) return nearestClear(cand[c]);
   // No single escape clears every body (a pinch between overlapping bodies): search the sphere of
   // directions around the pivot for a valid one, else the one with the smallest worst penetration. The
-  // search is remembered for the sweep (pinch_searches_): relaxStrip repeats it for the same point.
+  // search is remembered for the sweep (w.pinch_searches): relaxStrip repeats it for the same point.
   const Vec3 base = cand[count - 1];
   // (HAIR_SIM_NO_PINCH_MEMORY: every search anew, for the test PinchMemoryGivesTheSameBits.)
 #if !defined(HAIR_SIM_NO_PINCH_MEMORY)
-  for (const PinchSearch& s : pinch_searches_) {
+  for (const PinchSearch& s : w.pinch_searches) {
     if (s.sweep == sweep_ && s.bodies == now.data() && s.pivot == pivot && s.d == d &&
-        s.previous_end == prepared_previous_end_ && s.base == base && s.level == clear_level_ &&
+        s.previous_end == w.prepared_previous_end && s.base == base && s.level == w.clear_level &&
         s.have_before == have_before)
       return s.found ? nearestClear(s.result) : s.result;
   }
-  PinchSearch& memo = pinch_searches_[static_cast<std::size_t>(pinch_next_)];
-  pinch_next_ = (pinch_next_ + 1) % kPinchSearches;
+  PinchSearch& memo = w.pinch_searches[static_cast<std::size_t>(w.pinch_next)];
+  w.pinch_next = (w.pinch_next + 1) % kPinchSearches;
 #else
   PinchSearch memo;
 #endif
@@ -1305,9 +1431,9 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   memo.bodies = now.data();
   memo.pivot = pivot;
   memo.d = d;
-  memo.previous_end = prepared_previous_end_;
+  memo.previous_end = w.prepared_previous_end;
   memo.base = memo.result = base;
-  memo.level = clear_level_;
+  memo.level = w.clear_level;
   memo.have_before = have_before;
   double best_depth = 1e300;
   const Vec3 t1 = base.unitOrthogonal(), t2 = base.cross(t1);
@@ -1326,21 +1452,23 @@ Vec3 Simulator::escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const
   return memo.result;
 }
 
-bool Simulator::stripOutsideBand(std::size_t strip) const {
+bool Simulator::stripOutsideBand(const SweepScratch& w, std::size_t strip) const {
   const Strip& s = hairstyle_.strips[strip];
   for (int r = 1; r < s.rows; ++r)
-    if (rowOutsideBand(strip, r)) return true;
+    if (rowOutsideBand(w, strip, r)) return true;
   return false;
 }
 
-bool Simulator::rowOutsideBand(std::size_t strip, int row) const { return rowBandSide(strip, row) != 0; }
+bool Simulator::rowOutsideBand(const SweepScratch& w, std::size_t strip, int row) const {
+  return rowBandSide(w, strip, row) != 0;
+}
 
-int Simulator::rowBandSide(std::size_t strip, int row) const {
+int Simulator::rowBandSide(const SweepScratch& w, std::size_t strip, int row) const {
   const Strip& s = hairstyle_.strips[strip];
   const std::size_t begin = static_cast<std::size_t>(strip_offset_[strip] + s.index(row, 0));
   const std::size_t end = begin + static_cast<std::size_t>(s.columns);
-  // relaxStrip may hold a row's far edge to that of the rows below it (tighten_to_).
-  const int to = tighten_to_.empty() ? row : tighten_to_[static_cast<std::size_t>(row)];
+  // relaxStrip may hold a row's far edge to that of the rows below it (w.tighten_to).
+  const int to = w.tighten_to.empty() ? row : w.tighten_to[static_cast<std::size_t>(row)];
   int side = 0;
   for (std::size_t i = begin; i < end; ++i)
     for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
@@ -1383,19 +1511,20 @@ double Simulator::withinRest(std::size_t i, std::size_t j, double fallback) cons
   return fallback;
 }
 
-void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
+void Simulator::relaxStrip(SweepScratch& w, std::size_t strip, const std::vector<Ellipsoid>& now,
                            const std::vector<Ellipsoid>& before) {
   const Strip& s = hairstyle_.strips[strip];
   const int offset = strip_offset_[strip];
-  const int saved_collisions = collisions_;
-  for (int pass = 0; pass < 8 && stripOutsideBand(strip); ++pass) {
+  const int saved_collisions = w.collisions;
+  for (int pass = 0; pass < 8 && stripOutsideBand(w, strip); ++pass) {
     for (int c = 0; c < s.columns; ++c) {
       for (int r = 1; r < s.rows; ++r) {
         const std::size_t i = static_cast<std::size_t>(offset + s.index(r, c));
         const Vec3& pivot = positions_[static_cast<std::size_t>(offset + s.index(r - 1, c))];
         const std::size_t local = static_cast<std::size_t>(s.index(r, c));
-        prepareBodies(pivot, length_[i], start_pos_[local], now, before);
-        direction_[i] = resolveCollisions(static_cast<int>(i), pivot, length_[i], direction_[i], now, before);
+        prepareBodies(w, pivot, length_[i], w.start_pos[local], now, before);
+        direction_[i] =
+            resolveCollisions(w, static_cast<int>(i), pivot, length_[i], direction_[i], now, before);
         positions_[i] = pivot + length_[i] * direction_[i];
       }
     }
@@ -1409,11 +1538,11 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
   // the band once each segment has been turned clear of the bodies (clearBodies: an end pressed against
   // a body slides along it); if none does, the row keeps what the passes left. The bodies keep the last
   // word: every row, moved or not, is cleared of them from its (possibly moved) pivots.
-  const bool crossed = stripOutsideBand(strip);
+  const bool crossed = stripOutsideBand(w, strip);
   const bool have_before = !before.empty();
-  row_dirs_.resize(static_cast<std::size_t>(s.columns));
-  tighten_to_.resize(static_cast<std::size_t>(s.rows));
-  for (int r = 0; r < s.rows; ++r) tighten_to_[static_cast<std::size_t>(r)] = r;
+  w.row_dirs.resize(static_cast<std::size_t>(s.columns));
+  w.tighten_to.resize(static_cast<std::size_t>(s.rows));
+  for (int r = 0; r < s.rows; ++r) w.tighten_to[static_cast<std::size_t>(r)] = r;
   for (int r = 1; crossed && r < s.rows; ++r) {
     auto at = [&](int c) { return static_cast<std::size_t>(offset + s.index(r, c)); };
     auto pivotOf = [&](int c) -> const Vec3& {
@@ -1427,23 +1556,23 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
       for (int c = 0; c < s.columns; ++c) {
         const double d = length_[at(c)];
         if (!now.empty()) {
-          prepareBodies(pivotOf(c), d, start_pos_[static_cast<std::size_t>(s.index(r, c))], now, before);
-          direction_[at(c)] = clearBodies(pivotOf(c), d, direction_[at(c)], now, have_before, level);
-          clear_level_ = 2;
-          outside = outside && clearOfAll(d, direction_[at(c)], now, have_before);
-          clear_level_ = 0;
+          prepareBodies(w, pivotOf(c), d, w.start_pos[static_cast<std::size_t>(s.index(r, c))], now, before);
+          direction_[at(c)] = clearBodies(w, pivotOf(c), d, direction_[at(c)], now, have_before, level);
+          w.clear_level = 2;
+          outside = outside && clearOfAll(w, d, direction_[at(c)], now, have_before);
+          w.clear_level = 0;
         }
         positions_[at(c)] = pivotOf(c) + d * direction_[at(c)];
       }
       return outside;
     };
     settle();
-    if (!rowOutsideBand(strip, r)) continue;
+    if (!rowOutsideBand(w, strip, r)) continue;
     Vec3 mean = Vec3::Zero(), centre = Vec3::Zero();
     for (int c = 0; c < s.columns; ++c) {
       mean += direction_[at(c)];
       centre += pivotOf(c);
-      row_dirs_[static_cast<std::size_t>(c)] = direction_[at(c)];
+      w.row_dirs[static_cast<std::size_t>(c)] = direction_[at(c)];
     }
     centre /= s.columns;
     // Inward (mu > 0): toward directions whose ends all meet, d u = d sqrt(1 - (s/d)^2) a + s e with e the
@@ -1484,7 +1613,7 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
         level = 1;
         candidate = -1;
       }
-      const Vec3 m = candidate < 0 ? mean : row_dirs_[static_cast<std::size_t>(candidate)];
+      const Vec3 m = candidate < 0 ? mean : w.row_dirs[static_cast<std::size_t>(candidate)];
       if (m.norm() < 1e-9) continue;
       const Vec3 mn = m.normalized();
       // A body can deflect an end so that the row's width jumps over the band between two steps of mu
@@ -1493,7 +1622,7 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
       int last_side[2] = {3, 3};  // per direction (outward, inward); 3 = none yet
       for (int k = 0; k <= 64 && !found; ++k) {
         const double mu = ((k + 1) / 2) * (k % 2 ? 1.0 : -1.0) / 32.0;
-        const int side = place(mn, mu) ? rowBandSide(strip, r) : 3;
+        const int side = place(mn, mu) ? rowBandSide(w, strip, r) : 3;
         found = side == 0;
         for (int dir = 0; dir < 2 && !found; ++dir) {
           if (k != 0 && (k % 2) != dir) continue;  // mu = 0 starts both directions
@@ -1501,7 +1630,7 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
             double a = last_mu[dir], b = mu;  // side(a) = last_side, side(b) = side
             for (int it = 0; it < 24 && !found; ++it) {
               const double mid = 0.5 * (a + b);
-              const int mid_side = place(mn, mid) ? rowBandSide(strip, r) : 3;
+              const int mid_side = place(mn, mid) ? rowBandSide(w, strip, r) : 3;
               found = mid_side == 0;
               if (mid_side == last_side[dir])
                 a = mid;
@@ -1518,29 +1647,29 @@ void Simulator::relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now,
     }
     if (found) continue;
     for (int c = 0; c < s.columns; ++c) {  // back to what the passes left (cleared of the bodies above)
-      direction_[at(c)] = row_dirs_[static_cast<std::size_t>(c)];
+      direction_[at(c)] = w.row_dirs[static_cast<std::size_t>(c)];
       positions_[at(c)] = pivotOf(c) + length_[at(c)] * direction_[at(c)];
     }
     // A body keeps the ends of this row from closing in far enough from where the row above put its
     // pivots (a strip draped over a body, its rest width narrowing toward the tips): the row above is
     // held to this row's far edge too, so that parallel segments meet it here, and both are placed again.
     const std::size_t above = static_cast<std::size_t>(r - 1);
-    if (r >= 2 && tighten_to_[above] < tighten_to_[static_cast<std::size_t>(r)]) {
-      tighten_to_[above] = tighten_to_[static_cast<std::size_t>(r)];
+    if (r >= 2 && w.tighten_to[above] < w.tighten_to[static_cast<std::size_t>(r)]) {
+      w.tighten_to[above] = w.tighten_to[static_cast<std::size_t>(r)];
       r -= 2;  // the loop's ++r: row r - 1 again
     }
   }
-  tighten_to_.clear();
-  collisions_ = saved_collisions;  // the sweep counted the segments turned out of a body
+  w.tighten_to.clear();
+  w.collisions = saved_collisions;  // the sweep counted the segments turned out of a body
   const double dt = params_.substep;
   for (int r = 1; r < s.rows; ++r)
     for (int c = 0; c < s.columns; ++c) {
       const std::size_t local = static_cast<std::size_t>(s.index(r, c));
       const std::size_t i = static_cast<std::size_t>(offset) + local;
       const Vec3& pivot = positions_[static_cast<std::size_t>(offset + s.index(r - 1, c))];
-      rate_[i] = rotationVectorBetween(start_dir_[local], direction_[i]);
+      rate_[i] = rotationVectorBetween(w.start_dir[local], direction_[i]);
       const Vec3 mid = pivot + 0.5 * length_[i] * direction_[i];
-      velocity_[i] = (mid - start_mid_[local]) / dt;
+      velocity_[i] = (mid - w.start_mid[local]) / dt;
     }
 }
 
@@ -1629,21 +1758,36 @@ void Simulator::step(const StepInputs& in) {
     }
   }
 
-  StepTally tally;
+  for (SweepScratch& w : scratch_) {
+    w.tally = StepTally();
+    w.collisions = 0;
+    w.exact_strips = 0;
+  }
   // A new mark for the points and strips placed in this sweep (never reused, even after a step() that threw
   // or a reset()).
   ++sweep_;
   if (step_path_ == StepPath::Exact || lane_point_.empty()) {
-    int offset = 0;
-    for (std::size_t si = 0; si < hairstyle_.strips.size(); ++si) {
-      stepStrip(in, f, si, offset, tally);
-      offset += hairstyle_.strips[si].pointCount();
+    // In the sweep order, each group with its own scratch as stepLanes sweeps them (the same bits).
+    for (std::size_t rank = 0; rank < sweep_order_.size(); ++rank) {
+      SweepScratch& w = scratch_[rank >= sweep_group_end_[0] && rank < sweep_group_end_[1] ? 1 : 0];
+      const std::size_t si = static_cast<std::size_t>(sweep_order_[rank]);
+      stepStrip(w, in, f, si, strip_offset_[si], w.tally);
+      ++w.exact_strips;
     }
-    exact_strips_ = static_cast<int>(hairstyle_.strips.size());
   } else {
-    stepLanes(in, f, tally);
+    stepLanes(in, f);
   }
-  bounds_ = nullptr;
+  StepTally tally;
+  exact_strips_ = 0;
+  for (SweepScratch& w : scratch_) {
+    w.bounds = nullptr;
+    tally.max_rate = std::max(tally.max_rate, w.tally.max_rate);
+    tally.max_rate2 = std::max(tally.max_rate2, w.tally.max_rate2);
+    tally.max_penetration = std::max(tally.max_penetration, w.tally.max_penetration);
+    tally.penetrations += w.tally.penetrations;
+    collisions_ += w.collisions;
+    exact_strips_ += w.exact_strips;
+  }
   max_rate_ = std::max(tally.max_rate, std::sqrt(tally.max_rate2) / f.dt);
   max_penetration_ = tally.max_penetration;
   penetrations_ = tally.penetrations;
@@ -1666,29 +1810,29 @@ Vec3 linearForce(const Vec3& force0, const Mat3& force_mid, const Mat3& force_ve
 }
 }  // namespace
 
-void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset,
-                          StepTally& tally, int from, bool from_lanes) {
+void Simulator::stepStrip(SweepScratch& w, const StepInputs& in, const StepFrame& f, std::size_t si,
+                          int offset, StepTally& tally, int from, bool from_lanes) {
   const double dt = f.dt, k = f.k, gamma = f.gamma, drag = f.drag;
   const double cos_max_bend = f.cos_max_bend, k_c = f.k_c, c_c = f.c_c;
   const Mat3& Rt = f.Rt;
   const bool turbulent = f.turbulent;
   static const std::vector<Ellipsoid> kNone;
   const Strip& s = hairstyle_.strips[si];
-  sweep_strip_ = static_cast<int>(si);
+  w.sweep_rank = strip_rank_[si];
   const std::vector<Ellipsoid>& bodies_now =
       bodies_.empty() ? kNone : bodies_now_[static_cast<std::size_t>(margin_of_strip_[si])];
   const std::vector<Ellipsoid>& bodies_before =
       (bodies_.empty() || !have_bodies_before_)
           ? kNone
           : bodies_before_[static_cast<std::size_t>(margin_of_strip_[si])];
-  bounds_ = bodies_.empty() ? nullptr : &body_bounds_[static_cast<std::size_t>(margin_of_strip_[si])];
+  w.bounds = bodies_.empty() ? nullptr : &body_bounds_[static_cast<std::size_t>(margin_of_strip_[si])];
   // The strip at the start of the substep for relaxStrip (rows >= 1, filled as the sweep moves them).
   const std::size_t count = static_cast<std::size_t>(s.pointCount());
-  if (start_pos_.size() < count) {
-    start_pos_.resize(count);
-    start_dir_.resize(count);
-    start_mid_.resize(count);
-    free_dir_.resize(count);
+  if (w.start_pos.size() < count) {
+    w.start_pos.resize(count);
+    w.start_dir.resize(count);
+    w.start_mid.resize(count);
+    w.free_dir.resize(count);
   }
   // The within-strip band (stripOutsideBand), checked as the sweep places the later point of each pair.
   const bool check_band = params_.springs_within_strips;
@@ -1710,37 +1854,37 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
   // Whether resolveCollisions' band projection would move the end `end` of point i (its first sweep's test).
   auto bandActs = [&](std::size_t i, const Vec3& end) {
     for (int q = partner_start_[i]; q < partner_start_[i + 1]; ++q) {
-      const Vec3* placed = placedPartner(static_cast<std::size_t>(q));
+      const Vec3* placed = placedPartner(w, static_cast<std::size_t>(q));
       if (!placed) continue;
       if (bandTarget((end - *placed).norm(), partner_rest_[static_cast<std::size_t>(q)]) != 0.0) return true;
     }
     return false;
   };
-  // Point i's state at the end of the substep: direction `next` from `pivot`, turned by w.
-  exact_placed_.clear();
-  exact_relaxed_ = false;
-  auto place = [&](std::size_t i, const Vec3& pivot, double d, const Vec3& next, const Vec3& w) {
-    exact_placed_.push_back(static_cast<int>(i));
-    tally.max_rate2 = std::max(tally.max_rate2, w.squaredNorm());
-    rate_[i] = w;
+  // Point i's state at the end of the substep: direction `next` from `pivot`, turned by rot.
+  w.exact_placed.clear();
+  w.exact_relaxed = false;
+  auto place = [&](std::size_t i, const Vec3& pivot, double d, const Vec3& next, const Vec3& rot) {
+    w.exact_placed.push_back(static_cast<int>(i));
+    tally.max_rate2 = std::max(tally.max_rate2, rot.squaredNorm());
+    rate_[i] = rot;
     direction_[i] = next;
     positions_[i] = pivot + d * next;
     moved_in_step_[i] = sweep_;
     const Vec3 mid_next = pivot + 0.5 * d * next;
-    velocity_[i] = (mid_next - start_mid_[i - static_cast<std::size_t>(offset)]) / dt;
+    velocity_[i] = (mid_next - w.start_mid[i - static_cast<std::size_t>(offset)]) / dt;
   };
   // Point i's segment midpoint at the start of the substep, from its parent's start position (row r >= 2:
-  // kept in start_pos_ when the sweep reached it; row 1: a root, which never moves) and its own start
+  // kept in w.start_pos when the sweep reached it; row 1: a root, which never moves) and its own start
   // direction: bit for bit the midpoint the last substep computed as pivot + d/2 direction (place,
   // relaxStrip, the lanes), so it is not stored.
   auto midAtStart = [&](int r, std::size_t parent, std::size_t i, double d) -> Vec3 {
-    const Vec3& pivot = r == 1 ? positions_[parent] : start_pos_[parent - static_cast<std::size_t>(offset)];
+    const Vec3& pivot = r == 1 ? positions_[parent] : w.start_pos[parent - static_cast<std::size_t>(offset)];
     return pivot + 0.5 * d * direction_[i];
   };
   for (int c = 0; c < s.columns; ++c) {
     // The free step (the dynamics before the bend limit and the constraints) of each row is taken from its
     // parent's free step: the forces act at the segment hung from the parent's free end (free_pivot), and the
-    // hinge's rest direction is carried by the parents' free directions (free_dir_). The constraints then
+    // hinge's rest direction is carried by the parents' free directions (w.free_dir). The constraints then
     // place the ends root to tip from the parents' final ends (pivot). Q: the rotation of row q_row's free
     // direction from its styled frame (the rest frame of row q_row + 1), brought down the column only where
     // the exact step needs it.
@@ -1759,7 +1903,7 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       if (r == 1) return rest_dir_[i];
       for (; q_row < r; ++q_row) {
         const std::size_t above = static_cast<std::size_t>(s.index(q_row, c));
-        Q = minimalRotation(Q * styled_dir_[offset + above], free_dir_[above]) * Q;
+        Q = minimalRotation(Q * styled_dir_[offset + above], w.free_dir[above]) * Q;
       }
       return Q * rest_dir_[i];
     };
@@ -1783,11 +1927,11 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
         // then a body in the way (kPointBodies), a spring band that the places already final would have
         // projected the end into, a pivot moved above or the bend limit is resolved from it, as the exact
         // step would after its own free step; the start state is kept for relaxStrip.
-        start_pos_[local] = positions_[i];
-        start_dir_[local] = direction_[i];
-        start_mid_[local] = midAtStart(r, parent, i, d);
+        w.start_pos[local] = positions_[i];
+        w.start_dir[local] = direction_[i];
+        w.start_mid[local] = midAtStart(r, parent, i, d);
         const Vec3& free_next = new_direction_[i];
-        free_dir_[local] = free_next;
+        w.free_dir[local] = free_next;
         free_pivot = new_position_[i];
         const Vec3& pivot = positions_[parent];
         const Vec3 limited =
@@ -1801,10 +1945,10 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
           parent = i;
           continue;
         }
-        prepareBodies(pivot, d, positions_[i], bodies_now, bodies_before);
+        prepareBodies(w, pivot, d, positions_[i], bodies_now, bodies_before);
         const Vec3 next =
-            resolveCollisions(static_cast<int>(i), pivot, d, limited, bodies_now, bodies_before);
-        countPenetration(pivot + d * next, bodies_now, tally);
+            resolveCollisions(w, static_cast<int>(i), pivot, d, limited, bodies_now, bodies_before);
+        countPenetration(w, pivot + d * next, bodies_now, tally);
         if (!diverged && next == free_next) {
           tally.max_rate2 = std::max(tally.max_rate2, commitLanes(i));
         } else {
@@ -1823,9 +1967,9 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       const Vec3 n = direction_[i];
       const Vec3 mid = free_pivot + 0.5 * d * n;
       const Vec3& v = velocity_[i];  // midpoint velocity relative to the head over the last substep
-      start_pos_[local] = positions_[i];
-      start_dir_[local] = n;
-      start_mid_[local] = midAtStart(r, parent, i, d);
+      w.start_pos[local] = positions_[i];
+      w.start_dir[local] = n;
+      w.start_mid[local] = midAtStart(r, parent, i, d);
       // (6): F = d (rho (g + a) + drag (air - v)) + the springs' force, with the fictitious acceleration a
       // of the head frame (linear, angular, centrifugal, Coriolis) and the drag of the air relative to the
       // hair: linear in the midpoint and its velocity (StepFrame::force0, force_mid, force_vel).
@@ -1835,10 +1979,10 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       // (8)-(10): reaction constraint while the control point is inside an inflated body (only a
       // body within the segment's reach can hold it).
       const Vec3 end_now = free_pivot + d * n;
-      prepareBodies(free_pivot, d, positions_[i], bodies_now, bodies_before);
-      for (std::size_t b : near_) {
+      prepareBodies(w, free_pivot, d, positions_[i], bodies_now, bodies_before);
+      for (std::size_t b : w.near) {
         const Ellipsoid& e = bodies_now[b];
-        if ((q_pivot_[b] + d * (e.Sinv() * n)).squaredNorm() >= 1.0) continue;
+        if ((w.q_pivot[b] + d * (e.Sinv() * n)).squaredNorm() >= 1.0) continue;
         const Ellipsoid::ClosestPoint cp = e.closestPoint(end_now);
         const Vec3 v_end = (end_now - positions_[i]) / dt;
         F = reactionForce(F, -cp.normal, -cp.signed_distance, v_end, k_c, c_c);
@@ -1850,31 +1994,31 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
       M -= k * rotationVectorBetween(rest, n);  // (both terms are perpendicular to n)
       // (7) corrected: I (w^{n+1} - w^n) + gamma dt w^n = dt^2 M; a swing, so without a component
       // along n (twisting a segment about itself does not move it).
-      Vec3 w = rate_[i] * (1.0 - gamma * dt * inv_i) + (dt * dt * inv_i) * M;
-      w -= w.dot(n) * n;
-      const double step_angle = w.norm();
-      if (step_angle > params_.max_angle_step) w *= params_.max_angle_step / step_angle;
-      Vec3 next = rotatePerpendicular(w, n).normalized();
+      Vec3 rot = rate_[i] * (1.0 - gamma * dt * inv_i) + (dt * dt * inv_i) * M;
+      rot -= rot.dot(n) * n;
+      const double step_angle = rot.norm();
+      if (step_angle > params_.max_angle_step) rot *= params_.max_angle_step / step_angle;
+      Vec3 next = rotatePerpendicular(rot, n).normalized();
       const Vec3 free_next = next;
-      free_dir_[local] = free_next;
+      w.free_dir[local] = free_next;
       const bool pivot_moved = pivot != free_pivot;
       free_pivot = free_pivot + d * free_next;
       next = limitBend(rest, next);
       if (!bodies_now.empty() || partner_start_[i + 1] > partner_start_[i]) {
-        if (pivot_moved) prepareBodies(pivot, d, positions_[i], bodies_now, bodies_before);
-        next = resolveCollisions(static_cast<int>(i), pivot, d, next, bodies_now, bodies_before);
-        countPenetration(pivot + d * next, bodies_now, tally);
+        if (pivot_moved) prepareBodies(w, pivot, d, positions_[i], bodies_now, bodies_before);
+        next = resolveCollisions(w, static_cast<int>(i), pivot, d, next, bodies_now, bodies_before);
+        countPenetration(w, pivot + d * next, bodies_now, tally);
       }
-      // The rotation of this substep: w itself unless a limit or a constraint moved the end.
-      if (next != free_next) w = rotationVectorBetween(n, next);
-      place(i, pivot, d, next, w);
+      // The rotation of this substep: rot itself unless a limit or a constraint moved the end.
+      if (next != free_next) rot = rotationVectorBetween(n, next);
+      place(i, pivot, d, next, rot);
       checkBand(i);
       parent = i;
     }
   }
   if (outside_band) {
-    exact_relaxed_ = true;
-    relaxStrip(si, bodies_now, bodies_before);
+    w.exact_relaxed = true;
+    relaxStrip(w, si, bodies_now, bodies_before);
     for (int p = s.columns; p < s.pointCount(); ++p) {
       const std::size_t i = static_cast<std::size_t>(offset + p);
       tally.max_rate = std::max(tally.max_rate, rate_[i].norm() / dt);
@@ -1886,9 +2030,10 @@ void Simulator::stepStrip(const StepInputs& in, const StepFrame& f, std::size_t 
   }
 }
 
-void Simulator::countPenetration(const Vec3& end, const std::vector<Ellipsoid>& now, StepTally& tally) const {
+void Simulator::countPenetration(const SweepScratch& w, const Vec3& end, const std::vector<Ellipsoid>& now,
+                                 StepTally& tally) const {
   bool inside = false;
-  for (std::size_t b : near_)
+  for (std::size_t b : w.near)
     if (now[b].contains(end)) {
       tally.max_penetration = std::max(tally.max_penetration, -now[b].closestPoint(end).signed_distance);
       inside = true;

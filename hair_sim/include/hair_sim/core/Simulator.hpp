@@ -132,13 +132,23 @@ class Simulator {
   /// same code is slower without AVX-512.)
   static const char* kernelInstructionSet(StepPath path);
   /// Threads for step() (1 = the calling thread only, the default): threads - 1 helper threads scan parts of
-  /// the spring pairs (every path, from kMinPairsForHelpers pairs) and, on the Lanes paths, compute blocks
-  /// of chains while the calling thread commits the strips in order (the exact step and the band stay on
-  /// it), so the hair is bit-identical with any count. Hairstyles of fewer than 512 chains
-  /// (kMinBlocksForHelpers blocks) keep the blocks on the calling thread. Throws std::invalid_argument
-  /// outside [1, 64].
+  /// the spring pairs (every path, from kMinPairsForHelpers pairs) and, on the Lanes paths, one of them
+  /// sweeps the second group of strips (sweepGroupOf) while the calling thread sweeps the first, each with
+  /// its blocks of chains and its exact steps, the runs of blocks shared out between the two; then the
+  /// calling thread sweeps the boundary. The sweep order is the same with any count, so the hair is
+  /// bit-identical with any count; more than 2 threads only scan the springs. Hairstyles of fewer than 512
+  /// chains (kMinBlocksForHelpers blocks) keep the sweeps on the calling thread. Throws
+  /// std::invalid_argument outside [1, 64].
   void setThreads(int threads);
   int threads() const;
+  /// The sweep group of strip s (every path sweeps the strips in this order, strip order within a group):
+  /// 0 the strips whose chains all lie in the first half of the blocks and that share no spring pair with
+  /// a strip of the second half, 1 likewise for the second half, 2 the rest (the boundary), swept after both.
+  /// Groups 0 and 1 share no spring pair, so they are swept at once on 2 threads.
+  int sweepGroupOf(std::size_t strip) const {
+    const std::size_t rank = static_cast<std::size_t>(strip_rank_.at(strip));
+    return rank < sweep_group_end_[0] ? 0 : rank < sweep_group_end_[1] ? 1 : 2;
+  }
   /// Strips the last step() gave to the exact per-strip step (all of them on the Exact path).
   int exactStripCount() const { return exact_strips_; }
 
@@ -186,6 +196,8 @@ class Simulator {
   static double inertiaFloor(double stiffness, double damping, double dt);
 
  private:
+  struct SweepScratch;  // (below: the exact step's working state, one per concurrent sweep)
+  struct BodyBound;
   void buildChains();
   /// The blocks of chains for the Lanes path (after buildChains).
   void buildLanes();
@@ -218,15 +230,17 @@ class Simulator {
   /// column took the exact step's own dynamics: the bend limit applied when the lanes flagged it
   /// (kPointBend), then committed as it is when no pivot above moved, no body is in the way and no spring
   /// band would move it, else resolveCollisions from it. Lists the points it
-  /// places itself in exact_placed_ and sets exact_relaxed_ when relaxStrip ran (stepLanes copies those
+  /// places itself in w.exact_placed and sets w.exact_relaxed when relaxStrip ran (stepLanes copies those
   /// back).
-  void stepStrip(const StepInputs& in, const StepFrame& f, std::size_t si, int offset, StepTally& tally,
-                 int from = 0, bool from_lanes = false);
-  /// The penetration tally of a segment's end after resolveCollisions (the bodies near_ of its pivot).
-  void countPenetration(const Vec3& end, const std::vector<Ellipsoid>& now, StepTally& tally) const;
+  void stepStrip(SweepScratch& w, const StepInputs& in, const StepFrame& f, std::size_t si, int offset,
+                 StepTally& tally, int from = 0, bool from_lanes = false);
+  /// The penetration tally of a segment's end after resolveCollisions (the bodies w.near of its pivot).
+  void countPenetration(const SweepScratch& w, const Vec3& end, const std::vector<Ellipsoid>& now,
+                        StepTally& tally) const;
   /// The Lanes path: every block through lanes::stepBlock, the band of every spring pair checked at the new
-  /// places, the strips that passed committed, the others through stepStrip in strip order.
-  void stepLanes(const StepInputs& in, const StepFrame& f, StepTally& tally);
+  /// places, the strips that passed committed, the others through stepStrip, in the sweep order
+  /// (buildSweepOrder): the two groups at once on 2 threads or more, then the boundary.
+  void stepLanes(const StepInputs& in, const StepFrame& f);
   /// lane_constants_ from the segment constants (buildLanes, setParameters).
   void fillLaneConstants();
   /// Point i takes the lanes' result (new_*_) as its state at the end of the substep (the exact step of its
@@ -236,11 +250,12 @@ class Simulator {
   /// else null: new_position_ in a strip committed from the lanes (stepLanes' buffer swap makes it the state
   /// at the end), positions_ where the exact step placed it. The partner's strip is read from partner_strip_,
   /// indexed by q like partner_index_ (in order, where strip_of_point_[j] is read at scattered j), and
-  /// moved_in_step_ only outside a committed strip. A partner in a strip after the one stepStrip steps
-  /// (sweep_strip_) has no place yet: null without the loads at j.
-  const Vec3* placedPartner(std::size_t q) const {
+  /// moved_in_step_ only outside a committed strip. A partner in a strip after the one stepStrip steps in the
+  /// sweep order (w.sweep_rank; partner_rank_ read in order too) has no place yet: null without the loads at
+  /// j.
+  const Vec3* placedPartner(const SweepScratch& w, std::size_t q) const {
+    if (partner_rank_[q] > w.sweep_rank) return nullptr;
     const int strip = partner_strip_[q];
-    if (strip > sweep_strip_) return nullptr;
     const std::size_t j = static_cast<std::size_t>(partner_index_[q]);
     if (strip_committed_[static_cast<std::size_t>(strip)] == sweep_) return &new_position_[j];
     return moved_in_step_[j] == sweep_ ? &positions_[j] : nullptr;
@@ -251,35 +266,41 @@ class Simulator {
   /// Inertia floors (1 / I) and compensated rest directions from the lengths, styled directions and params_.
   void updateSegmentConstants();
   void buildSprings();
-  /// band_pairs_ from springs_ and the band's factors (end of buildSprings, setParameters).
+  /// The sweep order (sweep_order_, strip_rank_, partner_rank_, sweep_group_end_, sweep_mid_block_) from the
+  /// blocks and the spring pairs (start of buildBandPairs): the strips whose chains all lie in the first half
+  /// of the blocks and that pair with no strip of the second half, then likewise those of the second half,
+  /// then the rest (the boundary).
+  void buildSweepOrder();
+  /// band_pairs_ from springs_, the sweep order and the band's factors (end of buildSprings, setParameters).
   void buildBandPairs();
   void computeSpringForces();
   /// The valid direction nearest to dir on the arc toward an escape direction (the ITP method on testMargin,
   /// each probe decided by clearOf's tests, prepareBodies first) for the bodies.
-  Vec3 escapeBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
-                    bool have_before) const;
+  Vec3 escapeBodies(SweepScratch& w, const Vec3& pivot, double d, const Vec3& dir,
+                    const std::vector<Ellipsoid>& now, bool have_before) const;
   /// Maps the pivot and the previous end of a segment into the sphere space of every body and keeps
-  /// the bodies within its reach (near_); resolveCollisions and the reaction constraint use them.
-  void prepareBodies(const Vec3& pivot, double d, const Vec3& previous_end, const std::vector<Ellipsoid>& now,
-                     const std::vector<Ellipsoid>& before);
+  /// the bodies within its reach (w.near); resolveCollisions and the reaction constraint use them.
+  void prepareBodies(SweepScratch& w, const Vec3& pivot, double d, const Vec3& previous_end,
+                     const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
   /// Turns the segment pivot -> pivot + d * dir out of the bodies (prepareBodies first); returns the
   /// corrected direction.
-  Vec3 resolveCollisions(int point, const Vec3& pivot, double d, const Vec3& dir,
+  Vec3 resolveCollisions(SweepScratch& w, int point, const Vec3& pivot, double d, const Vec3& dir,
                          const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
   /// Is the segment pivot -> pivot + d * u clear of near body b (prepareBodies first): end outside, the
   /// segment not cutting through it, the end's path over the substep not entering it?
-  bool clearOf(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
-               bool have_before) const;
+  bool clearOf(const SweepScratch& w, std::size_t b, double d, const Vec3& u,
+               const std::vector<Ellipsoid>& now, bool have_before) const;
   /// The end of direction u in near body b's sphere space (prepareBodies first).
-  Vec3 endInSphere(std::size_t b, double d, const Vec3& u, const std::vector<Ellipsoid>& now) const;
+  Vec3 endInSphere(const SweepScratch& w, std::size_t b, double d, const Vec3& u,
+                   const std::vector<Ellipsoid>& now) const;
   /// clearOf's tests for near body b on the end q_end (endInSphere): -1 when it passes them all, else the
   /// first it fails: 0 the end inside, 1 the segment through the body, 2 the end's path into it.
-  int failedKind(std::size_t b, const Vec3& q_end, bool have_before) const;
+  int failedKind(const SweepScratch& w, std::size_t b, const Vec3& q_end, bool have_before) const;
   /// The margin of test `kind` of body b for the end q_end: positive where it passes (up to rounding at its
   /// boundary), smooth and of the first order in the direction at the boundary, for escapeBodies to
   /// interpolate.
-  double testMargin(std::size_t b, int kind, const Vec3& q_end) const;
-  /// One probe of escapeBodies: the first of clearOf's tests over near_ that the direction fails (kind -1:
+  double testMargin(const SweepScratch& w, std::size_t b, int kind, const Vec3& q_end) const;
+  /// One probe of escapeBodies: the first of clearOf's tests over w.near that the direction fails (kind -1:
   /// clear, as clearOfAll), and the margin of the test it follows.
   struct EscapeProbe {
     std::size_t body = 0;
@@ -287,23 +308,24 @@ class Simulator {
     double margin = std::numeric_limits<double>::quiet_NaN();
   };
   /// Maps u into each near body's sphere space once for both.
-  EscapeProbe probeEscape(double d, const Vec3& u, const std::vector<Ellipsoid>& now, bool have_before,
-                          std::size_t follow_body = 0, int follow_kind = -1) const;
+  EscapeProbe probeEscape(const SweepScratch& w, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
+                          bool have_before, std::size_t follow_body = 0, int follow_kind = -1) const;
   /// clearOf for every near body.
-  bool clearOfAll(double d, const Vec3& u, const std::vector<Ellipsoid>& now, bool have_before) const;
+  bool clearOfAll(const SweepScratch& w, double d, const Vec3& u, const std::vector<Ellipsoid>& now,
+                  bool have_before) const;
   /// The bodies' part of resolveCollisions (prepareBodies first): dir when the segment is clear of every
   /// near body, else the nearest clear direction found by escapeBodies, with the swept test and then the
   /// segment test dropped when no direction passes them all (the end outside every body comes first).
   /// first_level 1 starts without the swept test.
-  Vec3 clearBodies(const Vec3& pivot, double d, const Vec3& dir, const std::vector<Ellipsoid>& now,
-                   bool have_before, int first_level = 0);
+  Vec3 clearBodies(SweepScratch& w, const Vec3& pivot, double d, const Vec3& dir,
+                   const std::vector<Ellipsoid>& now, bool have_before, int first_level = 0);
   /// Is some within-strip pair of the strip outside the hard band [contact, far] x rest length?
-  bool stripOutsideBand(std::size_t strip) const;
+  bool stripOutsideBand(const SweepScratch& w, std::size_t strip) const;
   /// The same for the pairs of one row of the strip.
-  bool rowOutsideBand(std::size_t strip, int row) const;
+  bool rowOutsideBand(const SweepScratch& w, std::size_t strip, int row) const;
   /// Where the row's within-strip pairs are against the band: 0 within, 1 some too far apart, -1 some too
   /// close, 2 both.
-  int rowBandSide(std::size_t strip, int row) const;
+  int rowBandSide(const SweepScratch& w, std::size_t strip, int row) const;
   /// A within-strip pair at distance dist against the band: 1 farther than far_factor x far_rest (the far
   /// edge, to 1e-10 relative), -1 closer than the contact edge x rest, else 0.
   int bandSide(double dist, double rest, double far_rest) const;
@@ -323,7 +345,8 @@ class Simulator {
   /// segments turned toward or away from each other, each cleared of the bodies, until the row meets it;
   /// if none does, the row above is held to this row's far edge and both are placed again. Every row is
   /// cleared of the bodies from its (possibly moved) pivots.
-  void relaxStrip(std::size_t strip, const std::vector<Ellipsoid>& now, const std::vector<Ellipsoid>& before);
+  void relaxStrip(SweepScratch& w, std::size_t strip, const std::vector<Ellipsoid>& now,
+                  const std::vector<Ellipsoid>& before);
 
   Hairstyle hairstyle_;
   PhysicsParameters params_;
@@ -362,53 +385,10 @@ class Simulator {
   // The sweep (sweep_) in which stepStrip gave a point its final position (the points of a strip committed
   // from the lanes are marked by strip_committed_ instead).
   std::vector<long> moved_in_step_;
-  // resolveCollisions: the bodies within reach of the segment, the pivot and the previous end in the
-  // sphere space of each body.
-  std::vector<std::size_t> near_;
-  std::vector<Vec3> q_pivot_, q_prev_;
-  std::vector<double> c_pivot_, c_prev_;  ///< |q|^2 - 1 of q_pivot_, q_prev_ (bodies within reach)
-  std::vector<char> pivot_inside_, is_near_;
-  /// clearOf's tests: 0 all, 1 without the swept test, 2 the end point alone (resolveCollisions' fallbacks).
-  int clear_level_ = 0;
-  /// The previous end prepareBodies was last called with (its pivot and length are escapeBodies' own).
-  Vec3 prepared_previous_end_ = Vec3::Zero();
-  /// escapeBodies' search of the sphere of directions, remembered within a sweep: the direction it found
-  /// (`found`: the first clear one, from which the arc to dir is searched) or the least penetrating one,
-  /// for the same bodies, pivot, length, previous end, first candidate and test level. The search is a
-  /// function of these alone, so a remembered one gives the same bits. relaxStrip asks again and again
-  /// for the same point when no direction clears every body (a pinch): 33,293 of 33,353 searches of the slow
-  /// fuzz input were found here with 32 entries (33,005 with 8). Written by escapeBodies (const: the calling
-  /// thread's exact step alone runs it, never a helper).
-  struct PinchSearch {
-    long sweep = -1;
-    const Ellipsoid* bodies = nullptr;
-    Vec3 pivot = Vec3::Zero(), previous_end = Vec3::Zero(), base = Vec3::Zero(), result = Vec3::Zero();
-    double d = 0.0;
-    int level = 0;
-    bool have_before = false, found = false;
-  };
-  static constexpr int kPinchSearches = 32;
-  mutable std::array<PinchSearch, kPinchSearches> pinch_searches_{};
-  mutable int pinch_next_ = 0;  ///< the entry of pinch_searches_ written next
-  std::vector<Vec3> row_dirs_;  ///< relaxStrip: a row's directions before the parallel fallback
-  /// stepStrip: the points of the strip it placed itself (the others took the lanes' results, so their
-  /// state already equals the lanes' buffers, as the roots' does), and whether relaxStrip moved it (then any
-  /// point may differ).
-  std::vector<int> exact_placed_;
-  bool exact_relaxed_ = false;
-  /// relaxStrip: row r's far edge is the narrowest of rows r..tighten_to_[r] (empty: each row its own).
-  std::vector<int> tighten_to_;
-  // The current strip at the start of the substep (positions, directions, segment midpoints).
-  std::vector<Vec3> start_pos_, start_dir_, start_mid_;
-  /// stepStrip: the free directions of the strip's points (before the bend limit and the constraints), which
-  /// carry the hinges' rest directions down the columns.
-  std::vector<Vec3> free_dir_;
   std::vector<int> partner_start_;  ///< CSR: partners of point k are [start[k], start[k+1])
   std::vector<int> partner_index_;
   std::vector<int> partner_strip_;  ///< strip_of_point_ of partner_index_
-  /// The strip stepStrip is stepping: the sweep goes in strip order, so no point of a later strip is placed
-  /// yet (placedPartner).
-  int sweep_strip_ = std::numeric_limits<int>::max();
+  std::vector<int> partner_rank_;   ///< strip_rank_ of partner_strip_ (buildSweepOrder)
   std::vector<double> partner_rest_;
   /// stepLanes' band check: a spring pair by the strip of its later point, neither a root.
   struct BandPair {
@@ -430,9 +410,72 @@ class Simulator {
         1.0;  ///< |S_now Sinv_before - I| (Frobenius): a point's displacement per metre from the centre
     double shift = 0.0;  ///< |centre now - centre before|
   };
-  /// Per distinct margin, this substep's bounds (filled in step()); bounds_ is the current strip's, or none.
+  /// Per distinct margin, this substep's bounds (filled in step()); SweepScratch::bounds is the current
+  /// strip's, or none.
   std::vector<std::vector<BodyBound>> body_bounds_;
-  const std::vector<BodyBound>* bounds_ = nullptr;
+  /// The exact step's working state: one per sweep that may run at once (scratch_), so that the two groups
+  /// of strips (buildSweepOrder) are swept on two threads. stepStrip and everything it calls write only
+  /// their sweep's scratch, the points of the strip they step and its band pairs' lengths.
+  struct PinchSearch {
+    long sweep = -1;
+    const Ellipsoid* bodies = nullptr;
+    Vec3 pivot = Vec3::Zero(), previous_end = Vec3::Zero(), base = Vec3::Zero(), result = Vec3::Zero();
+    double d = 0.0;
+    int level = 0;
+    bool have_before = false, found = false;
+  };
+  static constexpr int kPinchSearches = 32;
+  struct SweepScratch {
+    // resolveCollisions: the bodies within reach of the segment, the pivot and the previous end in the
+    // sphere space of each body.
+    std::vector<std::size_t> near;
+    std::vector<Vec3> q_pivot, q_prev;
+    std::vector<double> c_pivot, c_prev;  ///< |q|^2 - 1 of q_pivot, q_prev (bodies within reach)
+    std::vector<char> pivot_inside, is_near;
+    /// clearOf's tests: 0 all, 1 without the swept test, 2 the end point alone (resolveCollisions'
+    /// fallbacks).
+    int clear_level = 0;
+    /// The previous end prepareBodies was last called with (its pivot and length are escapeBodies' own).
+    Vec3 prepared_previous_end = Vec3::Zero();
+    /// escapeBodies' search of the sphere of directions, remembered within a sweep: the direction it found
+    /// (`found`: the first clear one, from which the arc to dir is searched) or the least penetrating one,
+    /// for the same bodies, pivot, length, previous end, first candidate and test level. The search is a
+    /// function of these alone, so a remembered one gives the same bits (whichever sweep remembers it).
+    /// relaxStrip asks again and again for the same point when no direction clears every body (a pinch):
+    /// 33,293 of 33,353 searches of the slow fuzz input were found here with 32 entries (33,005 with 8).
+    std::array<PinchSearch, kPinchSearches> pinch_searches{};
+    int pinch_next = 0;          ///< the entry of pinch_searches written next
+    std::vector<Vec3> row_dirs;  ///< relaxStrip: a row's directions before the parallel fallback
+    /// stepStrip: the points of the strip it placed itself (the others took the lanes' results, so their
+    /// state already equals the lanes' buffers, as the roots' does), and whether relaxStrip moved it (then
+    /// any point may differ).
+    std::vector<int> exact_placed;
+    bool exact_relaxed = false;
+    /// relaxStrip: row r's far edge is the narrowest of rows r..tighten_to[r] (empty: each row its own).
+    std::vector<int> tighten_to;
+    // The current strip at the start of the substep (positions, directions, segment midpoints).
+    std::vector<Vec3> start_pos, start_dir, start_mid;
+    /// stepStrip: the free directions of the strip's points (before the bend limit and the constraints),
+    /// which carry the hinges' rest directions down the columns.
+    std::vector<Vec3> free_dir;
+    /// The sweep place (strip_rank_) of the strip stepStrip is stepping: no point of a strip later in the
+    /// sweep order is placed yet (placedPartner).
+    int sweep_rank = std::numeric_limits<int>::max();
+    /// The current strip's body bounds (body_bounds_), or none.
+    const std::vector<BodyBound>* bounds = nullptr;
+    int collisions = 0;    ///< segments turned out of a body in this sweep
+    int exact_strips = 0;  ///< strips of this sweep that took the exact step
+    StepTally tally;       ///< this sweep's part of the substep's tally
+  };
+  /// [0]: the sweep of the first group and the boundary (the calling thread), [1]: of the second group.
+  std::array<SweepScratch, 2> scratch_;
+  /// The sweep order (buildSweepOrder): the strips of the first group, of the second, then the boundary,
+  /// each in strip order; sweep_group_end_[g] is the end of group g in sweep_order_. strip_rank_[s] is strip
+  /// s's place in it.
+  std::vector<int> sweep_order_, strip_rank_;
+  std::array<std::size_t, 3> sweep_group_end_{};
+  /// The blocks of the first group's strips are those before this one, the second group's from it.
+  std::size_t sweep_mid_block_ = 0;
   // Bodies in the head frame, per distinct margin, now and at the previous substep.
   std::vector<std::vector<Ellipsoid>> bodies_now_;
   std::vector<std::vector<Ellipsoid>> bodies_before_;
@@ -455,8 +498,6 @@ class Simulator {
   std::vector<Vec3> new_position_, new_direction_, new_rate_, new_velocity_;
   /// Per strip, the sweep (sweep_) in which it was last committed from the lanes (-1: none).
   std::vector<long> strip_committed_;
-  /// Per strip, the first place of its sweep (column * rows + row) that takes the exact step, or kNoExact.
-  std::vector<int> strip_exact_from_;
   static constexpr int kNoExact = 1 << 30;
   std::vector<lanes::LaneBody> lane_bodies_;  ///< [margin][body], this substep
   std::vector<int> strip_last_block_;         ///< per strip, the block of its last chain
