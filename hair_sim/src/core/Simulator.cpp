@@ -245,6 +245,29 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
       }
     }
 
+  // The next substep's spring scan (computeSpringForces), pair by pair as the sweeps find their final
+  // lengths: the extremes of the lengths and the pairs outside their dead band, in each sweep's scratch. What
+  // scanSprings does, on the same lengths: the same extremes and the same pairs.
+  const double scan_lo2 = params_.spring_proximity_factor * params_.spring_proximity_factor;
+  const double scan_hi2 = params_.spring_far_factor * params_.spring_far_factor;
+  for (SweepScratch& w : scratch_) {
+    w.extremes = SpringExtremes();
+    w.outside_bits.assign((springs_.size() + 63) / 64, 0);
+    w.band_dist2.resize(max_band_pairs_);
+  }
+  auto scanPair = [&](SweepScratch& w, std::size_t k, double l2) {
+    const double r2 = l2 * spring_inv_rest2_[k];
+    SpringExtremes& e = w.extremes;
+    if (k < spring_within_) {
+      e.min_within = std::min(e.min_within, r2);
+      e.max_within = std::max(e.max_within, r2);
+    } else {
+      e.min_between = std::min(e.min_between, r2);
+      e.max_between = std::max(e.max_between, r2);
+      e.min_gap2 = std::min(e.min_gap2, l2);
+    }
+    w.outside_bits[k >> 6] |= static_cast<std::uint64_t>((r2 < scan_lo2) | (r2 > scan_hi2)) << (k & 63);
+  };
   lanes::BlockJob job;
   job.dt = f.dt, job.k = f.k, job.gamma = f.gamma, job.drag = f.drag;
   job.max_angle_step = params_.max_angle_step;
@@ -370,18 +393,19 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
         const int flagged = block_flags_[ch];
         if (flagged) from = std::min(from, c * s.rows + flagged);
       }
-      // A band pair's |a - b|^2 in the lanes' buffers, kept for the next substep's spring scan as well. (An
-      // earlier strip's final place is there: its lanes' result, or its exact step's, copied there below.)
+      // A band pair's |a - b|^2 in the lanes' buffers (an earlier strip's final place is there: its lanes'
+      // result, or its exact step's, copied there below), kept in w.band_dist2 for the spring scan.
       auto bandDist2 = [&](const BandPair& bp) {
-        const double dist2 = (new_position_[static_cast<std::size_t>(bp.later)] -
-                              new_position_[static_cast<std::size_t>(bp.earlier)])
-                                 .squaredNorm();
-        spring_dist2_[static_cast<std::size_t>(bp.spring)] = dist2;
-        return dist2;
+        return (new_position_[static_cast<std::size_t>(bp.later)] -
+                new_position_[static_cast<std::size_t>(bp.earlier)])
+            .squaredNorm();
       };
-      for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q) {
+      const int q0 = band_pair_start_[si], q1 = band_pair_start_[si + 1];
+      double* band_dist2 = w.band_dist2.data();  // [q - q0]
+      for (int q = q0; q < q1; ++q) {
         const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
         const double dist2 = bandDist2(bp);
+        band_dist2[q - q0] = dist2;
         // Kept by the later point of the pair in the sweep; without a branch (the pairs outside come at
         // random).
         const bool outside = (dist2 < bp.near2) | (dist2 > bp.far2);
@@ -405,12 +429,17 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
         } else {
           for (int i : w.exact_placed) copyBack(static_cast<std::size_t>(i));
         }
-        for (int q = band_pair_start_[si]; q < band_pair_start_[si + 1]; ++q)  // its pairs' final lengths
-          bandDist2(band_pairs_[static_cast<std::size_t>(q)]);
+        for (int q = q0; q < q1; ++q) {  // its pairs' final lengths
+          const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
+          scanPair(w, static_cast<std::size_t>(bp.spring), bandDist2(bp));
+        }
         continue;
       }
       // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
       strip_committed_[si] = sweep_;
+      for (int q = q0; q < q1; ++q)
+        scanPair(w, static_cast<std::size_t>(band_pairs_[static_cast<std::size_t>(q)].spring),
+                 band_dist2[q - q0]);
       for (int c = 0; c < s.columns; ++c)
         max_rate2 = std::max(max_rate2, chain_max_rate2_[chain0 + static_cast<std::size_t>(c)]);
     }
@@ -478,15 +507,15 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
   direction_.swap(new_direction_);
   rate_.swap(new_rate_);
   velocity_.swap(new_velocity_);
-  // The pairs with a root (no band pair) at the state's places: spring_dist2_ is then whole for the next
-  // scan.
+  // The pairs with a root (no band pair) at the state's places: the scan is then whole.
   for (int k : root_springs_) {
     const std::size_t kk = static_cast<std::size_t>(k);
-    spring_dist2_[kk] = (positions_[static_cast<std::size_t>(spring_b_[kk])] -
-                         positions_[static_cast<std::size_t>(spring_a_[kk])])
-                            .squaredNorm();
+    scanPair(scratch_[0], kk,
+             (positions_[static_cast<std::size_t>(spring_b_[kk])] -
+              positions_[static_cast<std::size_t>(spring_a_[kk])])
+                 .squaredNorm());
   }
-  spring_dist2_sweep_ = sweep_;
+  spring_scan_sweep_ = sweep_;
 }
 
 void Simulator::syncLaneBuffers() {
@@ -582,7 +611,7 @@ void Simulator::setParameters(const PhysicsParameters& parameters) {
 }
 
 void Simulator::reset() {
-  spring_dist2_sweep_ = -1;  // (the hair moves: the next scan reads the points)
+  spring_scan_sweep_ = -1;  // (the hair moves: the next scan reads the points)
   int offset = 0;
   for (const Strip& s : hairstyle_.strips) {
     for (int p = 0; p < s.pointCount(); ++p)
@@ -829,8 +858,7 @@ void Simulator::buildBandPairs() {
   };
   std::vector<BandPair> pairs;
   root_springs_.clear();
-  spring_dist2_.assign(springs_.size(), 0.0);
-  spring_dist2_sweep_ = -1;
+  spring_scan_sweep_ = -1;
   for (std::size_t k = 0; k < springs_.size(); ++k) {
     const SpringPair& p = springs_[k];
     if (isRoot(p.a) || isRoot(p.b)) {
@@ -860,7 +888,11 @@ void Simulator::buildBandPairs() {
     pairs.push_back(bp);
     ++band_pair_start_[t + 1];
   }
-  for (std::size_t t = 0; t < hairstyle_.strips.size(); ++t) band_pair_start_[t + 1] += band_pair_start_[t];
+  max_band_pairs_ = 0;
+  for (std::size_t t = 0; t < hairstyle_.strips.size(); ++t) {
+    max_band_pairs_ = std::max(max_band_pairs_, static_cast<std::size_t>(band_pair_start_[t + 1]));
+    band_pair_start_[t + 1] += band_pair_start_[t];
+  }
   band_pairs_.resize(pairs.size());
   std::vector<int> fill(band_pair_start_.begin(), band_pair_start_.end() - 1);
   for (const BandPair& bp : pairs)
@@ -872,21 +904,16 @@ namespace {
 
 /// The extremes of computeSpringForces over the spring pairs: (length / rest)^2 within strips and between
 /// strips, and the smallest squared length between strips. A NaN never enters them (std::min / std::max).
-struct SpringExtremes {
-  double min_within = 1e300, max_within = 0.0, min_between = 1e300, max_between = 0.0, min_gap2 = 1e300;
-};
-
 /// computeSpringForces' scan of pairs [begin, end) (pairs below `within` are within strips, the others
 /// between them): pair k joins points a[k] and b[k], r2 = |positions[b] - positions[a]|^2 inv_rest2[k].
 /// Updates the extremes and writes the pairs outside the band (r2 < lo2 or r2 > hi2) to `outside` in order;
 /// returns how many. (Scalar: in lanes of AVX2, gathering the points, it took more time on this machine.)
 template <bool kBetween>
-std::size_t scanSpringRange(const Vec3* positions, const double* dist2, const int* a, const int* b,
-                            const double* inv_rest2, std::size_t begin, std::size_t end, double lo2,
-                            double hi2, double& min_r2, double& max_r2, double& min_l2, int* outside,
-                            std::size_t found) {
+std::size_t scanSpringRange(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
+                            std::size_t begin, std::size_t end, double lo2, double hi2, double& min_r2,
+                            double& max_r2, double& min_l2, int* outside, std::size_t found) {
   for (std::size_t k = begin; k < end; ++k) {
-    const double l2 = dist2 ? dist2[k] : (positions[b[k]] - positions[a[k]]).squaredNorm();
+    const double l2 = (positions[b[k]] - positions[a[k]]).squaredNorm();
     const double r2 = l2 * inv_rest2[k];
     min_r2 = std::min(min_r2, r2);
     max_r2 = std::max(max_r2, r2);
@@ -899,15 +926,15 @@ std::size_t scanSpringRange(const Vec3* positions, const double* dist2, const in
   return found;
 }
 
-std::size_t scanSprings(const Vec3* positions, const double* dist2, const int* a, const int* b,
-                        const double* inv_rest2, std::size_t begin, std::size_t within, std::size_t end,
-                        double lo2, double hi2, SpringExtremes& e, int* outside) {
+std::size_t scanSprings(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
+                        std::size_t begin, std::size_t within, std::size_t end, double lo2, double hi2,
+                        SpringExtremes& e, int* outside) {
   double unused = 0.0;
   const std::size_t split = std::min(std::max(begin, within), end);
-  const std::size_t found = scanSpringRange<false>(positions, dist2, a, b, inv_rest2, begin, split, lo2, hi2,
+  const std::size_t found = scanSpringRange<false>(positions, a, b, inv_rest2, begin, split, lo2, hi2,
                                                    e.min_within, e.max_within, unused, outside, 0);
-  return scanSpringRange<true>(positions, dist2, a, b, inv_rest2, split, end, lo2, hi2, e.min_between,
-                               e.max_between, e.min_gap2, outside, found);
+  return scanSpringRange<true>(positions, a, b, inv_rest2, split, end, lo2, hi2, e.min_between, e.max_between,
+                               e.min_gap2, outside, found);
 }
 
 }  // namespace
@@ -919,13 +946,16 @@ void Simulator::computeSpringForces() {
   std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
   const double ks = params_.spring_stiffness;
   const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
-  // The scan (scanSprings) finds the extremes and the pairs outside their dead band (most pairs are within
-  // it: no square root, no division); then (11) for those, in pair order: x = stretch beyond the band, F =
-  // -k_s x along the pair (none for a NaN, which the scan does not list). With helper threads (as many parts
-  // as threads), each part of the pairs is scanned on any thread into its own extremes and its own stretch
-  // of spring_outside_; the forces then go in pair order.
+  // The scan finds the extremes and the pairs outside their dead band (most pairs are within it: no square
+  // root, no division); then (11) for those, in pair order: x = stretch beyond the band, F = -k_s x along the
+  // pair (none for a NaN, which the scan does not list). When the last substep took the lanes and nothing
+  // has moved the hair since, stepLanes' sweeps did the scan as they found each pair's final length (the
+  // pairs outside as bits, read here in pair order); else scanSprings here from the points, with helper
+  // threads in as many parts as threads, each part into its own extremes and its own stretch of
+  // spring_outside_. Either way the same extremes and the same pairs outside, in pair order.
   const std::size_t count = springs_.size();
-  LaneWorkers* workers = count >= kMinPairsForHelpers ? workers_.get() : nullptr;
+  const bool swept = spring_scan_sweep_ == sweep_;
+  LaneWorkers* workers = !swept && count >= kMinPairsForHelpers ? workers_.get() : nullptr;
   const std::size_t parts = workers ? static_cast<std::size_t>(threads()) : 1;
   struct Part {
     std::size_t begin = 0, end = 0, found = 0;
@@ -933,34 +963,45 @@ void Simulator::computeSpringForces() {
   };
   std::array<Part, 64> part;
   const double lo2 = lo * lo, hi2 = hi * hi;
-  // The lengths stepLanes kept when they are those of the state (the last substep took the lanes and nothing
-  // has moved the hair since), else from the points.
-  const double* dist2 = spring_dist2_sweep_ == sweep_ ? spring_dist2_.data() : nullptr;
-  auto scan = [&](std::size_t c) {
-    Part& pc = part[c];
-    pc.found =
-        scanSprings(positions_.data(), dist2, spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(),
-                    pc.begin, spring_within_, pc.end, lo2, hi2, pc.e, spring_outside_.data() + pc.begin);
-  };
   for (std::size_t c = 0; c < parts; ++c) {
     part[c].begin = count * c / parts;
     part[c].end = count * (c + 1) / parts;
   }
-  if (workers) {
-    workers->start(
-        parts, [](void* run, std::size_t c) { (*static_cast<decltype(scan)*>(run))(c); }, &scan);
-    workers->finish();
+  auto merge = [](SpringExtremes& into, const SpringExtremes& e) {
+    into.min_within = std::min(into.min_within, e.min_within);
+    into.max_within = std::max(into.max_within, e.max_within);
+    into.min_between = std::min(into.min_between, e.min_between);
+    into.max_between = std::max(into.max_between, e.max_between);
+    into.min_gap2 = std::min(into.min_gap2, e.min_gap2);
+  };
+  if (swept) {
+    const std::uint64_t* bits0 = scratch_[0].outside_bits.data();
+    const std::uint64_t* bits1 = scratch_[1].outside_bits.data();
+    std::size_t found = 0;
+    for (std::size_t word = 0; word < scratch_[0].outside_bits.size(); ++word)
+      for (std::uint64_t bits = bits0[word] | bits1[word]; bits != 0; bits &= bits - 1)
+        spring_outside_[found++] =
+            static_cast<int>(64 * word + static_cast<std::size_t>(__builtin_ctzll(bits)));
+    part[0].found = found;
+    merge(part[0].e, scratch_[0].extremes);
+    merge(part[0].e, scratch_[1].extremes);
   } else {
-    scan(0);
+    auto scan = [&](std::size_t c) {
+      Part& pc = part[c];
+      pc.found =
+          scanSprings(positions_.data(), spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(),
+                      pc.begin, spring_within_, pc.end, lo2, hi2, pc.e, spring_outside_.data() + pc.begin);
+    };
+    if (workers) {
+      workers->start(
+          parts, [](void* run, std::size_t c) { (*static_cast<decltype(scan)*>(run))(c); }, &scan);
+      workers->finish();
+    } else {
+      scan(0);
+    }
   }
   SpringExtremes e;
-  for (std::size_t c = 0; c < parts; ++c) {
-    e.min_within = std::min(e.min_within, part[c].e.min_within);
-    e.max_within = std::max(e.max_within, part[c].e.max_within);
-    e.min_between = std::min(e.min_between, part[c].e.min_between);
-    e.max_between = std::max(e.max_between, part[c].e.max_between);
-    e.min_gap2 = std::min(e.min_gap2, part[c].e.min_gap2);
-  }
+  for (std::size_t c = 0; c < parts; ++c) merge(e, part[c].e);
   const Vec3* pos = positions_.data();
   Vec3* force = spring_force_.data();
   for (std::size_t c = 0; c < parts; ++c)
@@ -1680,7 +1721,7 @@ void Simulator::setShape(const std::vector<Vec3>& target) {
   for (std::size_t i = 0; i < target.size(); ++i)
     if (!target[i].allFinite())
       throw std::invalid_argument("Simulator::setShape(...) : point " + std::to_string(i) + " is not finite");
-  spring_dist2_sweep_ = -1;  // (the hair moves: the next scan reads the points)
+  spring_scan_sweep_ = -1;  // (the hair moves: the next scan reads the points)
   int offset = 0;
   for (const Strip& s : hairstyle_.strips) {
     for (int c = 0; c < s.columns; ++c) {

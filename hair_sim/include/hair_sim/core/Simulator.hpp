@@ -39,6 +39,7 @@
 /// keep the last word) forbid every placement: in one simulated hour of the soak, 4 substeps, all under a
 /// nod of pi/2 at 20 Hz.
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -92,6 +93,12 @@ struct SpringPair {
   int b = 0;
   double rest = 0.0;  ///< rest length (m)
   bool within_strip = true;
+};
+
+/// Internal to the core: the extremes of the spring pairs' lengths that computeSpringForces publishes
+/// (squared ratios to the rest length within and between strips, the smallest squared gap between strips).
+struct SpringExtremes {
+  double min_within = 1e300, max_within = 0.0, min_between = 1e300, max_between = 0.0, min_gap2 = 1e300;
 };
 
 class Simulator {
@@ -373,12 +380,11 @@ class Simulator {
   std::vector<Body> bodies_;
   std::vector<SpringPair> springs_;
   std::vector<double> spring_inv_rest2_;  ///< per spring pair, 1 / rest^2
-  /// Per spring pair, |b - a|^2 at the state's places, written by stepLanes (its band check's values, those
-  /// of the strips that took the exact step computed again after it, the pairs with a root after the swap)
-  /// for the next computeSpringForces to read in pair order; valid when spring_dist2_sweep_ == sweep_.
-  std::vector<double> spring_dist2_;
-  std::vector<int> root_springs_;  ///< the spring pairs with a root (no band pair)
-  long spring_dist2_sweep_ = -1;
+  std::vector<int> root_springs_;         ///< the spring pairs with a root (no band pair)
+  /// The sweep (sweep_) whose stepLanes scanned every spring pair at its final length (the sweeps' scratch:
+  /// extremes, outside_bits), which the next computeSpringForces takes instead of its own scan while
+  /// nothing else has moved the hair (reset, setShape, buildBandPairs: -1).
+  long spring_scan_sweep_ = -1;
   std::vector<int> spring_a_, spring_b_;  ///< per spring pair, its points (springs_[k].a, .b)
   std::size_t spring_within_ = 0;         ///< springs_[0, spring_within_) are the pairs within strips
   std::vector<int> spring_outside_;       ///< computeSpringForces: the pairs outside their band
@@ -401,6 +407,7 @@ class Simulator {
   };
   std::vector<BandPair> band_pairs_;
   std::vector<int> band_pair_start_;  ///< per strip, CSR into band_pairs_
+  std::size_t max_band_pairs_ = 0;    ///< the most band pairs of one strip
   /// prepareBodies' quick reject of a body in the head frame, before its sphere-space test: a ball about
   /// its centre that holds it, and how far the body's motion over the substep carries a point near it.
   struct BodyBound {
@@ -463,9 +470,15 @@ class Simulator {
     int sweep_rank = std::numeric_limits<int>::max();
     /// The current strip's body bounds (body_bounds_), or none.
     const std::vector<BodyBound>* bounds = nullptr;
-    int collisions = 0;    ///< segments turned out of a body in this sweep
-    int exact_strips = 0;  ///< strips of this sweep that took the exact step
-    StepTally tally;       ///< this sweep's part of the substep's tally
+    /// The spring scan of the next substep, done as the sweep finds each pair's final length (stepLanes): the
+    /// extremes of its pairs and a bit per spring pair outside its dead band (computeSpringForces reads both
+    /// sweeps' bits in pair order).
+    SpringExtremes extremes;
+    std::vector<std::uint64_t> outside_bits;
+    std::vector<double> band_dist2;  ///< stepLanes: the current strip's band pairs' |a - b|^2
+    int collisions = 0;              ///< segments turned out of a body in this sweep
+    int exact_strips = 0;            ///< strips of this sweep that took the exact step
+    StepTally tally;                 ///< this sweep's part of the substep's tally
   };
   /// [0]: the sweep of the first group and the boundary (the calling thread), [1]: of the second group.
   std::array<SweepScratch, 2> scratch_;
