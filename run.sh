@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# hair_sim: set up, build and run. Usage: ./run.sh demo | test | bench [flags] | build | load [s] | fuzz [s] | sanitize | soak [s]
+# hair_sim: set up, build and run. Usage: ./run.sh demo | test | bench [flags] | build | load [s] | fuzz [s] | sanitize | tsan | soak [s]
 # Installs what it needs with apt (as root, or through sudo) on a fresh Debian 12 machine.
 set -eo pipefail
 cd "$(dirname "$(readlink -f "$0")")"
@@ -121,6 +121,26 @@ case "$cmd" in
     [ $status -eq 0 ] || echo "run.sh: crashers in build-fuzz/crashes/ (fix, then copy them into test/fuzz_corpus/<target>/)" >&2
     exit $status
     ;;
+  tsan)
+    # The tests that run the step and the mesh on helper threads (1, 2 and 3 threads, the two sweeps at once)
+    # under ThreadSanitizer, in build-tsan/. The kernels' run-time dispatch is left out (-DHAIR_SIM_NO_AVX2):
+    # GCC's target_clones resolvers run before the TSan runtime is up and crash the program at load. Address
+    # space randomisation is turned off for the tests (setarch -R): TSan's shadow memory needs the classic
+    # layout on kernels with 28 bits of mmap randomness.
+    install_deps
+    mkdir -p build-tsan/devel/lib/python3/dist-packages
+    cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCATKIN_DEVEL_PREFIX="$ROOT/build-tsan/devel" \
+      -DCMAKE_CXX_FLAGS="-fsanitize=thread -fno-omit-frame-pointer -DHAIR_SIM_NO_AVX2" \
+      -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=thread" \
+      >build-tsan/cmake.log 2>&1 || { cat build-tsan/cmake.log; exit 1; }
+    cmake --build build-tsan -j"$(nproc)" --target SimulatorTest HairMeshBuilderTest
+    cd hair_sim/test
+    for t in "SimulatorTest *Thread*:*SweepGroups*" "HairMeshBuilderTest *Thread*"; do
+      set -- $t
+      TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 setarch "$(uname -m)" -R \
+        "$ROOT/build-tsan/devel/lib/hair_sim/$1" --gtest_filter="$2"
+    done
+    ;;
   sanitize)
     # The unit tests (gtest), the fuzz replays and the short soak under AddressSanitizer and
     # UndefinedBehaviorSanitizer, in build-asan/ (the rostests are not run here).
@@ -143,7 +163,7 @@ case "$cmd" in
     exec build/devel/lib/hair_sim/hair_sim_soak --seconds "${2:-3600}" --json-out build/soak.json
     ;;
   *)
-    echo "usage: ./run.sh demo | test | offline-demo | bench [benchmark flags] | build | load [seconds] | fuzz [seconds] | sanitize | soak [seconds]" >&2
+    echo "usage: ./run.sh demo | test | offline-demo | bench [benchmark flags] | build | load [seconds] | fuzz [seconds] | sanitize | tsan | soak [seconds]" >&2
     exit 2
     ;;
 esac
