@@ -45,6 +45,17 @@ build() {
   cmake --build build -j"$(nproc)"
 }
 
+# configure_sanitized DIR SANITIZERS [EXTRA_CXX_FLAGS]: a RelWithDebInfo build in DIR with gcc's
+# -fsanitize=SANITIZERS (compiler and linker); the configure log in DIR/cmake.log, shown when it fails.
+configure_sanitized() {
+  local dir=$1 sanitizers=$2 extra=${3:-}
+  mkdir -p "$dir/devel/lib/python3/dist-packages"
+  cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCATKIN_DEVEL_PREFIX="$ROOT/$dir/devel" \
+    -DCMAKE_CXX_FLAGS="-fsanitize=$sanitizers $extra -fno-omit-frame-pointer" \
+    -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=$sanitizers" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=$sanitizers" \
+    >"$dir/cmake.log" 2>&1 || { cat "$dir/cmake.log"; exit 1; }
+}
+
 mkdir -p build "$ROS_LOG_DIR"
 cmd=${1:-}
 case "$cmd" in
@@ -128,11 +139,7 @@ case "$cmd" in
     # space randomisation is turned off for the tests (setarch -R): TSan's shadow memory needs the classic
     # layout on kernels with 28 bits of mmap randomness.
     install_deps
-    mkdir -p build-tsan/devel/lib/python3/dist-packages
-    cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCATKIN_DEVEL_PREFIX="$ROOT/build-tsan/devel" \
-      -DCMAKE_CXX_FLAGS="-fsanitize=thread -fno-omit-frame-pointer -DHAIR_SIM_NO_AVX2" \
-      -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=thread" \
-      >build-tsan/cmake.log 2>&1 || { cat build-tsan/cmake.log; exit 1; }
+    configure_sanitized build-tsan thread -DHAIR_SIM_NO_AVX2
     cmake --build build-tsan -j"$(nproc)" --target SimulatorTest HairMeshBuilderTest
     cd hair_sim/test
     for t in "SimulatorTest *Thread*:*SweepGroups*" "HairMeshBuilderTest *Thread*"; do
@@ -145,11 +152,7 @@ case "$cmd" in
     # The unit tests (gtest), the fuzz replays and the short soak under AddressSanitizer and
     # UndefinedBehaviorSanitizer, in build-asan/ (the rostests are not run here).
     install_deps
-    mkdir -p build-asan/devel/lib/python3/dist-packages
-    cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCATKIN_DEVEL_PREFIX="$ROOT/build-asan/devel" \
-      -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer" \
-      -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
-      >build-asan/cmake.log 2>&1 || { cat build-asan/cmake.log; exit 1; }
+    configure_sanitized build-asan address,undefined -fno-sanitize-recover=undefined
     cmake --build build-asan -j"$(nproc)" --target unit_tests
     cd build-asan && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       ctest --output-on-failure -j"$(nproc)" -R "_gtest_|FuzzReplay_|SoakShort"
