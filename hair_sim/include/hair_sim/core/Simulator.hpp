@@ -139,11 +139,12 @@ class Simulator {
   /// same code is slower without AVX-512.)
   static const char* kernelInstructionSet(StepPath path);
   /// Threads for step() (1 = the calling thread only, the default): threads - 1 helper threads scan parts of
-  /// the spring pairs (every path, from kMinPairsForHelpers pairs) and, on the Lanes paths, one of them
+  /// the spring pairs where the sweeps have not (computeSpringForces: the Exact path, the first substep after
+  /// a reset; from kMinPairsForHelpers pairs) and, on the Lanes paths, one of them
   /// sweeps the second group of strips (sweepGroupOf) while the calling thread sweeps the first, each with
   /// its blocks of chains and its exact steps, the runs of blocks shared out between the two; then the
   /// calling thread sweeps the boundary. The sweep order is the same with any count, so the hair is
-  /// bit-identical with any count; more than 2 threads only scan the springs. Hairstyles of fewer than 512
+  /// bit-identical with any count; more than 2 threads only help that scan. Hairstyles of fewer than 512
   /// chains (kMinBlocksForHelpers blocks) keep the sweeps on the calling thread. Throws
   /// std::invalid_argument outside [1, 64].
   void setThreads(int threads);
