@@ -42,6 +42,8 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "hair_sim/core/dynamics/HeadState.hpp"
@@ -153,8 +155,12 @@ class Simulator {
   /// 0 the strips whose chains all lie in the first half of the blocks and that share no spring pair with
   /// a strip of the second half, 1 likewise for the second half, 2 the rest (the boundary), swept after both.
   /// Groups 0 and 1 share no spring pair, so they are swept at once on 2 threads.
+  /// Throws std::out_of_range for a strip the hairstyle does not have.
   int sweepGroupOf(std::size_t strip) const {
-    const std::size_t rank = static_cast<std::size_t>(strip_rank_.at(strip));
+    if (strip >= strip_rank_.size())
+      throw std::out_of_range("Simulator::sweepGroupOf(...) : strip " + std::to_string(strip) +
+                              ", the hairstyle has " + std::to_string(strip_rank_.size()));
+    const std::size_t rank = static_cast<std::size_t>(strip_rank_[strip]);
     return rank < sweep_group_end_[0] ? 0 : rank < sweep_group_end_[1] ? 1 : 2;
   }
   /// Strips the last step() gave to the exact per-strip step (all of them on the Exact path).
