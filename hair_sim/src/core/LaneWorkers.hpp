@@ -4,8 +4,9 @@
 /// on the Lanes path, the sweep of the second group of strips (Simulator::stepLanes: the two groups share no
 /// spring pair and no block of chains, so they are swept at once), with the runs of blocks of chains
 /// (lanes::stepBlock, which reads only the block's own chains at the start of the substep and writes only
-/// their new state) shared between the two sweeps. Which thread computes a block does not change its result, and the sweep order does
-/// not depend on the threads, so the hair is the same bit for bit with any number of threads.
+/// their new state) shared between the two sweeps. Which thread computes a block does not change its result,
+/// and the sweep order does not depend on the threads, so the hair is the same bit for bit with any number of
+/// threads.
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
