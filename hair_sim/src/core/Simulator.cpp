@@ -171,13 +171,11 @@ void Simulator::buildLanes() {
   block_rows_.assign(blocks, 0);
   block_margin_.assign(blocks, -1);
   lane_point_.assign(blocks * static_cast<std::size_t>(max_rows) * W, -1);
-  lane_strip_.assign(blocks * W, -1);
   for (std::size_t ch = 0; ch < chains.size(); ++ch) {
     const std::size_t blk = ch / W, l = ch % W;
     const std::size_t si = static_cast<std::size_t>(chains[ch].first);
     const Strip& s = hairstyle_.strips[si];
     const int c = chains[ch].second;
-    lane_strip_[blk * W + l] = static_cast<int>(si);
     block_rows_[blk] = std::max(block_rows_[blk], s.rows);
     // A block whose strips differ in margin sees different inflated bodies: it takes the exact step.
     const int m = margin_of_strip_[si];
@@ -330,6 +328,12 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
     for (std::size_t blk = block_begin + run * kBlocksPerRun; blk < end; ++blk) runBlock(blk);
   };
   const std::size_t mid = sweep_mid_block_;
+  // Run `run` of group g (its blocks [0, mid) or [mid, blocks)), claimed from the helpers' claims by this
+  // thread: computed and marked done for the other sweep.
+  auto computeClaimedRun = [&](int g, std::size_t run) {
+    runOfBlocks(g == 0 ? 0 : mid, g == 0 ? mid : blocks, run);
+    workers->markRunDone(g, run);
+  };
   const std::size_t runs0 = (mid + kBlocksPerRun - 1) / kBlocksPerRun;
   const std::size_t runs1 = (blocks - mid + kBlocksPerRun - 1) / kBlocksPerRun;
   struct Lending {
@@ -348,8 +352,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
         if (!workers || g == 2) {
           runOfBlocks(block_begin, block_end, ready);
         } else if (workers->claimRun(g, false, claimed)) {  // (the front: the next run, ready)
-          runOfBlocks(block_begin, block_end, claimed);
-          workers->markRunDone(g, claimed);
+          computeClaimedRun(g, claimed);
         } else {
           workers->waitRunDone(g, ready);  // the other sweep claimed it from the back
         }
@@ -367,11 +370,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
         std::size_t run;
         while (static_cast<std::size_t>(lending.lent) < due && workers->claimRun(1 - g, true, run)) {
           const auto t0 = std::chrono::steady_clock::now();
-          if (g == 0)
-            runOfBlocks(mid, blocks, run);
-          else
-            runOfBlocks(0, mid, run);
-          workers->markRunDone(1 - g, run);
+          computeClaimedRun(1 - g, run);
           lending.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           ++lending.lent;
         }
@@ -453,12 +452,12 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
     // once done, computes the other group's unclaimed runs.
     struct SecondGroup {
       decltype(sweepGroup)* sweep;
-      decltype(runOfBlocks)* run;
+      decltype(computeClaimedRun)* compute;
       LaneWorkers* workers;
       SweepScratch* w;
       std::size_t order_begin, order_end, mid, blocks;
       std::exception_ptr error;
-    } second{&sweepGroup, &runOfBlocks, workers, &scratch_[1], end0, end1, mid, blocks, nullptr};
+    } second{&sweepGroup, &computeClaimedRun, workers, &scratch_[1], end0, end1, mid, blocks, nullptr};
     // The helper holds references into this frame: it is done before it ends, whatever happens.
     struct FinishHelpers {
       LaneWorkers* workers;
@@ -476,10 +475,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
           try {
             (*g.sweep)(*g.w, 1, g.order_begin, g.order_end, g.mid, g.blocks);
             std::size_t run;
-            while (g.workers->claimRun(0, true, run)) {
-              (*g.run)(0, g.mid, run);
-              g.workers->markRunDone(0, run);
-            }
+            while (g.workers->claimRun(0, true, run)) (*g.compute)(0, run);
           } catch (...) {
             g.error = std::current_exception();
           }
@@ -487,10 +483,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
         &second);
     sweepGroup(scratch_[0], 0, 0, end0, 0, mid);
     std::size_t run;
-    while (workers->claimRun(1, true, run)) {
-      runOfBlocks(mid, blocks, run);
-      workers->markRunDone(1, run);
-    }
+    while (workers->claimRun(1, true, run)) computeClaimedRun(1, run);
     workers->waitFor(0);
     if (second.error) std::rethrow_exception(second.error);
     auto since = [&](const Lending& l) { return std::chrono::duration<double>(l.end - start).count(); };

@@ -507,10 +507,10 @@ class Simulator {
   double max_ratio_[2] = {1.0, 1.0};
   int collisions_ = 0;
   // The Lanes path: per block of lanes::kLanes chains, its rows, its margin (-1: mixed, all exact) and per
-  // [block][row][lane] the control point (-1: none); per [block][lane] the strip (-1: none).
+  // [block][row][lane] the control point (-1: none).
   StepPath step_path_ = StepPath::Lanes;
   int exact_strips_ = 0;
-  std::vector<int> block_rows_, block_margin_, lane_point_, lane_strip_;
+  std::vector<int> block_rows_, block_margin_, lane_point_;
   int lane_stride_rows_ = 0;  ///< rows per block in lane_point_
   /// The lanes' results, the state at the end of the substep for the strips committed from them: stepLanes
   /// swaps them with the state (positions_, direction_, rate_, velocity_) after copying in the points the
