@@ -38,8 +38,9 @@ class LaneWorkers {
 
   /// The runs of blocks of two groups swept at once (Simulator::stepLanes): each group's own sweep claims its
   /// runs from the front as it reads its strips; the other sweep claims some from the back as it goes (the
-  /// lend, Balance below) and, once done with its own group, the rest. Which thread computes a run does not change its result. startRuns resets the claims
-  /// for a substep with runs[g] runs in group g (before start()).
+  /// lend, Balance below) and, once done with its own group, the rest. Which thread computes a run does not
+  /// change its result. startRuns resets the claims for a substep with runs[g] runs in group g (before
+  /// start()).
   void startRuns(std::size_t runs0, std::size_t runs1);
   /// Claims the next unclaimed run of group g from its front (or back); false when none is left.
   bool claimRun(int g, bool from_back, std::size_t& run);
