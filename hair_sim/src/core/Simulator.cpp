@@ -210,6 +210,20 @@ lanes::Isa laneIsa(Simulator::StepPath path) {
          : path == Simulator::StepPath::LanesAvx2   ? lanes::Isa::UpToAvx2
                                                     : lanes::Isa::Best;
 }
+
+/// Equation (11) for the spring pair (a, b) outside its dead band, at l2 = |pos[b] - pos[a]|^2 and r2 = l2 /
+/// rest^2: x = the stretch beyond the band (lo and hi: the proximity and far factors), F = -k_s x along the
+/// pair, added to a and taken from b (pulls a toward b when stretched, pushes them apart when compressed;
+/// none for a pair of length 0).
+inline void addSpringForce(int a, int b, double rest, const Vec3* pos, Vec3* force, double l2, double r2,
+                           double ks, double lo, double hi) {
+  const double length = std::sqrt(l2);
+  const double x = r2 < lo * lo ? length - lo * rest : length - hi * rest;
+  if (x == 0.0 || length < 1e-12) return;
+  const Vec3 f = (ks * x / length) * (pos[b] - pos[a]);
+  force[a] += f;
+  force[b] -= f;
+}
 }  // namespace
 
 const char* Simulator::kernelInstructionSet(StepPath path) {
@@ -243,20 +257,27 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
       }
     }
 
-  // The next substep's spring scan (computeSpringForces), pair by pair as the sweeps find their final
-  // lengths: the extremes of the lengths and the pairs outside their dead band, in each sweep's scratch. What
-  // scanSprings does, on the same lengths: the same extremes and the same pairs.
-  const double scan_lo2 = params_.spring_proximity_factor * params_.spring_proximity_factor;
-  const double scan_hi2 = params_.spring_far_factor * params_.spring_far_factor;
+  // The next substep's springs (computeSpringForces), pair by pair as the sweeps find their final lengths:
+  // the extremes of the lengths, in each sweep's scratch, and (11) for the pairs outside their dead band,
+  // added to spring_force_ in place. A strip's forces are cleared once its sweep no longer reads them (after
+  // its exact step), before any pair with it is final: a pair is final when the later of its strips in the
+  // sweep order is swept, and the kernel reads a strip's forces before that (its blocks are computed first).
+  // So every point's force is summed in the sweep order, the order computeSpringForces follows when it
+  // computes them itself (spring_force_order_): the same bits. The two groups share no pair, so no point's
+  // sum.
+  const double ks = params_.spring_stiffness;
+  const double scan_lo = params_.spring_proximity_factor, scan_hi = params_.spring_far_factor;
+  const double scan_lo2 = scan_lo * scan_lo, scan_hi2 = scan_hi * scan_hi;
   for (SweepScratch& w : scratch_) {
     w.extremes = SpringExtremes();
-    w.outside_bits.assign((springs_.size() + 63) / 64, 0);
     w.band_dist2.resize(max_band_pairs_);
+    w.band_outside.resize(max_band_pairs_);
   }
-  auto scanPair = [&](SweepScratch& w, std::size_t k, double l2) {
-    const double r2 = l2 * spring_inv_rest2_[k];
+  // A pair at its final length (l2, and r2 = l2 / rest^2): its part of the extremes; whether it is outside
+  // its dead band.
+  auto scanPair = [&](SweepScratch& w, bool within, double l2, double r2) {
     SpringExtremes& e = w.extremes;
-    if (k < spring_within_) {
+    if (within) {
       e.min_within = std::min(e.min_within, r2);
       e.max_within = std::max(e.max_within, r2);
     } else {
@@ -264,7 +285,26 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
       e.max_between = std::max(e.max_between, r2);
       e.min_gap2 = std::min(e.min_gap2, l2);
     }
-    w.outside_bits[k >> 6] |= static_cast<std::uint64_t>((r2 < scan_lo2) | (r2 > scan_hi2)) << (k & 63);
+    return (r2 < scan_lo2) | (r2 > scan_hi2);
+  };
+  // Strip si's band pairs [q0, q1) at their final lengths (dist2[q - q0]): its forces cleared, the pairs
+  // scanned, then (11) for those outside (listed without a branch: they come at random).
+  auto finishStrip = [&](SweepScratch& w, std::size_t si, int q0, int q1, const double* dist2) {
+    std::fill_n(spring_force_.begin() + strip_offset_[si], hairstyle_.strips[si].pointCount(), Vec3::Zero());
+    int* outside = w.band_outside.data();
+    int found = 0;
+    for (int q = q0; q < q1; ++q) {
+      const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
+      const double l2 = dist2[q - q0];
+      outside[found] = q;
+      found += scanPair(w, bp.within, l2, l2 * bp.inv_rest2);
+    }
+    for (int n = 0; n < found; ++n) {
+      const BandPair& bp = band_pairs_[static_cast<std::size_t>(outside[n])];
+      const double l2 = dist2[outside[n] - q0];
+      addSpringForce(bp.later_is_b ? bp.earlier : bp.later, bp.later_is_b ? bp.later : bp.earlier, bp.rest,
+                     new_position_.data(), spring_force_.data(), l2, l2 * bp.inv_rest2, ks, scan_lo, scan_hi);
+    }
   };
   lanes::BlockJob job;
   job.dt = f.dt, job.k = f.k, job.gamma = f.gamma, job.drag = f.drag;
@@ -428,17 +468,14 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
         } else {
           for (int i : w.exact_placed) copyBack(static_cast<std::size_t>(i));
         }
-        for (int q = q0; q < q1; ++q) {  // its pairs' final lengths
-          const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
-          scanPair(w, static_cast<std::size_t>(bp.spring), bandDist2(bp));
-        }
+        for (int q = q0; q < q1; ++q)  // its pairs' final lengths
+          band_dist2[q - q0] = bandDist2(band_pairs_[static_cast<std::size_t>(q)]);
+        finishStrip(w, si, q0, q1, band_dist2);
         continue;
       }
       // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
       strip_committed_[si] = sweep_;
-      for (int q = q0; q < q1; ++q)
-        scanPair(w, static_cast<std::size_t>(band_pairs_[static_cast<std::size_t>(q)].spring),
-                 band_dist2[q - q0]);
+      finishStrip(w, si, q0, q1, band_dist2);
       for (int c = 0; c < s.columns; ++c)
         max_rate2 = std::max(max_rate2, chain_max_rate2_[chain0 + static_cast<std::size_t>(c)]);
     }
@@ -503,10 +540,13 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
   // The pairs with a root (no band pair) at the state's places: the scan is then whole.
   for (int k : root_springs_) {
     const std::size_t kk = static_cast<std::size_t>(k);
-    scanPair(scratch_[0], kk,
-             (positions_[static_cast<std::size_t>(spring_b_[kk])] -
-              positions_[static_cast<std::size_t>(spring_a_[kk])])
-                 .squaredNorm());
+    const double l2 = (positions_[static_cast<std::size_t>(spring_b_[kk])] -
+                       positions_[static_cast<std::size_t>(spring_a_[kk])])
+                          .squaredNorm();
+    const double r2 = l2 * spring_inv_rest2_[kk];
+    if (scanPair(scratch_[0], kk < spring_within_, l2, r2))
+      addSpringForce(spring_a_[kk], spring_b_[kk], springs_[kk].rest, positions_.data(), spring_force_.data(),
+                     l2, r2, ks, scan_lo, scan_hi);
   }
   spring_scan_sweep_ = sweep_;
 }
@@ -867,6 +907,10 @@ void Simulator::buildBandPairs() {
     const bool a_later = rank_a != rank_b ? rank_a > rank_b : p.a > p.b;
     bp.later = a_later ? p.a : p.b;
     bp.earlier = a_later ? p.b : p.a;
+    bp.later_is_b = !a_later;
+    bp.inv_rest2 = spring_inv_rest2_[k];
+    bp.rest = p.rest;
+    bp.within = k < spring_within_;
     bp.near2 = (lo * p.rest) * (lo * p.rest) * (1.0 + 1e-9);
     bp.far2 = p.within_strip ? (hi * p.rest) * (hi * p.rest) * (1.0 - 1e-9)
                              : std::numeric_limits<double>::infinity();
@@ -891,6 +935,14 @@ void Simulator::buildBandPairs() {
   for (const BandPair& bp : pairs)
     band_pairs_[static_cast<std::size_t>(
         fill[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)])]++)] = bp;
+  // The order in which stepLanes' sweeps add the pairs' forces: strip by strip in the sweep order, each
+  // strip's band pairs in order, then the pairs with a root.
+  spring_force_order_.clear();
+  for (const int si : sweep_order_)
+    for (int q = band_pair_start_[static_cast<std::size_t>(si)];
+         q < band_pair_start_[static_cast<std::size_t>(si) + 1]; ++q)
+      spring_force_order_.push_back(band_pairs_[static_cast<std::size_t>(q)].spring);
+  spring_force_order_.insert(spring_force_order_.end(), root_springs_.begin(), root_springs_.end());
 }
 
 namespace {
@@ -933,57 +985,43 @@ std::size_t scanSprings(const Vec3* positions, const int* a, const int* b, const
 }  // namespace
 
 void Simulator::computeSpringForces() {
-  // Every point's force cleared in one sweep of the array: at 10,000 strips about 22,000 pairs a substep are
-  // outside their band (44,000 ends of 100,000 points), and clearing those ends one by one, at random in the
-  // hair, took longer (the sweep: 0.975-0.987 x the step's time, 2026-11-28).
-  std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
-  const double ks = params_.spring_stiffness;
-  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
   // The scan finds the extremes and the pairs outside their dead band (most pairs are within it: no square
-  // root, no division); then (11) for those, in pair order: x = stretch beyond the band, F = -k_s x along the
-  // pair (none for a NaN, which the scan does not list). When the last substep took the lanes and nothing
-  // has moved the hair since, stepLanes' sweeps did the scan as they found each pair's final length (the
-  // pairs outside as bits, read here in pair order); else scanSprings here from the points, with helper
+  // root, no division); then (11) for those. When the last substep took the lanes and nothing has moved the
+  // hair since, stepLanes' sweeps did both as they found each pair's final length: the forces are in
+  // spring_force_ and the extremes in the sweeps' scratch. Else scanSprings here from the points, with helper
   // threads in as many parts as threads, each part into its own extremes and its own stretch of
-  // spring_outside_. Either way the same extremes and the same pairs outside, in pair order.
+  // spring_outside_, then (11) for the pairs outside in the order the sweeps add them (spring_force_order_:
+  // every point's force summed in the same order, so the same bits).
   const std::size_t count = springs_.size();
-  const bool swept = spring_scan_sweep_ == sweep_;
-  LaneWorkers* workers = !swept && count >= kMinPairsForHelpers ? workers_.get() : nullptr;
-  const std::size_t parts = workers ? static_cast<std::size_t>(threads()) : 1;
-  struct Part {
-    std::size_t begin = 0, end = 0, found = 0;
-    SpringExtremes e;
+  SpringExtremes e;
+  auto merge = [](SpringExtremes& into, const SpringExtremes& from) {
+    into.min_within = std::min(into.min_within, from.min_within);
+    into.max_within = std::max(into.max_within, from.max_within);
+    into.min_between = std::min(into.min_between, from.min_between);
+    into.max_between = std::max(into.max_between, from.max_between);
+    into.min_gap2 = std::min(into.min_gap2, from.min_gap2);
   };
-  std::array<Part, 64> part;
-  const double lo2 = lo * lo, hi2 = hi * hi;
-  for (std::size_t c = 0; c < parts; ++c) {
-    part[c].begin = count * c / parts;
-    part[c].end = count * (c + 1) / parts;
-  }
-  auto merge = [](SpringExtremes& into, const SpringExtremes& e) {
-    into.min_within = std::min(into.min_within, e.min_within);
-    into.max_within = std::max(into.max_within, e.max_within);
-    into.min_between = std::min(into.min_between, e.min_between);
-    into.max_between = std::max(into.max_between, e.max_between);
-    into.min_gap2 = std::min(into.min_gap2, e.min_gap2);
-  };
-  if (swept) {
-    const std::uint64_t* bits0 = scratch_[0].outside_bits.data();
-    const std::uint64_t* bits1 = scratch_[1].outside_bits.data();
-    std::size_t found = 0;
-    for (std::size_t word = 0; word < scratch_[0].outside_bits.size(); ++word)
-      for (std::uint64_t bits = bits0[word] | bits1[word]; bits != 0; bits &= bits - 1)
-        spring_outside_[found++] =
-            static_cast<int>(64 * word + static_cast<std::size_t>(__builtin_ctzll(bits)));
-    part[0].found = found;
-    merge(part[0].e, scratch_[0].extremes);
-    merge(part[0].e, scratch_[1].extremes);
+  if (spring_scan_sweep_ == sweep_) {
+    merge(e, scratch_[0].extremes);
+    merge(e, scratch_[1].extremes);
   } else {
+    LaneWorkers* workers = count >= kMinPairsForHelpers ? workers_.get() : nullptr;
+    const std::size_t parts = workers ? static_cast<std::size_t>(threads()) : 1;
+    struct Part {
+      std::size_t begin = 0, end = 0, found = 0;
+      SpringExtremes e;
+    };
+    std::array<Part, 64> part;
+    const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
+    for (std::size_t c = 0; c < parts; ++c) {
+      part[c].begin = count * c / parts;
+      part[c].end = count * (c + 1) / parts;
+    }
     auto scan = [&](std::size_t c) {
       Part& pc = part[c];
-      pc.found =
-          scanSprings(positions_.data(), spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(),
-                      pc.begin, spring_within_, pc.end, lo2, hi2, pc.e, spring_outside_.data() + pc.begin);
+      pc.found = scanSprings(positions_.data(), spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(),
+                             pc.begin, spring_within_, pc.end, lo * lo, hi * hi, pc.e,
+                             spring_outside_.data() + pc.begin);
     };
     if (workers) {
       workers->start(
@@ -992,36 +1030,23 @@ void Simulator::computeSpringForces() {
     } else {
       scan(0);
     }
-  }
-  SpringExtremes e;
-  for (std::size_t c = 0; c < parts; ++c) merge(e, part[c].e);
-  const Vec3* pos = positions_.data();
-  Vec3* force = spring_force_.data();
-  for (std::size_t c = 0; c < parts; ++c)
-    for (std::size_t n = part[c].begin, end = part[c].begin + part[c].found; n < end; ++n) {
-      // The pairs outside lie at random in the pair order and their points at random in the hair: their ends
-      // are fetched ahead (the pair's record 16 pairs ahead, its points 8 ahead).
-      if (n + 16 < end) __builtin_prefetch(&springs_[static_cast<std::size_t>(spring_outside_[n + 16])]);
-      if (n + 8 < end) {
-        const SpringPair& ahead = springs_[static_cast<std::size_t>(spring_outside_[n + 8])];
-        __builtin_prefetch(&pos[ahead.a]);
-        __builtin_prefetch(&pos[ahead.b]);
-        __builtin_prefetch(&force[ahead.a], 1);
-        __builtin_prefetch(&force[ahead.b], 1);
-      }
-      const std::size_t k = static_cast<std::size_t>(spring_outside_[n]);
-      const SpringPair& p = springs_[k];
-      const Vec3 delta = pos[p.b] - pos[p.a];
-      const double l2 = delta.squaredNorm();
-      const double r2 = l2 * spring_inv_rest2_[k];
-      const double length = std::sqrt(l2);
-      const double x = r2 < lo * lo ? length - lo * p.rest : length - hi * p.rest;
-      if (x == 0.0 || length < 1e-12) continue;
-      const Vec3 f =
-          (ks * x / length) * delta;  // pulls a toward b when stretched, pushes apart when compressed
-      force[p.a] += f;
-      force[p.b] -= f;
+    spring_is_outside_.assign(count, 0);
+    for (std::size_t c = 0; c < parts; ++c) {
+      merge(e, part[c].e);
+      for (std::size_t n = part[c].begin, end = part[c].begin + part[c].found; n < end; ++n)
+        spring_is_outside_[static_cast<std::size_t>(spring_outside_[n])] = 1;
     }
+    std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
+    const Vec3* pos = positions_.data();
+    for (const int k : spring_force_order_) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      if (!spring_is_outside_[kk]) continue;
+      const SpringPair& p = springs_[kk];
+      const double l2 = (pos[p.b] - pos[p.a]).squaredNorm();
+      addSpringForce(p.a, p.b, p.rest, pos, spring_force_.data(), l2, l2 * spring_inv_rest2_[kk],
+                     params_.spring_stiffness, lo, hi);
+    }
+  }
   auto ratio = [](double r2, double none) { return r2 == none ? 1.0 : std::sqrt(r2); };
   min_ratio_[0] = ratio(e.min_between, 1e300), max_ratio_[0] = ratio(e.max_between, 0.0);
   min_ratio_[1] = ratio(e.min_within, 1e300), max_ratio_[1] = ratio(e.max_within, 0.0);

@@ -380,7 +380,9 @@ class Simulator {
   std::vector<Vec3> rest_dir_;       ///< compensated rest direction at the styled pose (head frame)
   std::vector<double> length_;       ///< d
   std::vector<double> inv_inertia_;  ///< 1 / I
-  std::vector<Vec3> spring_force_;   ///< equation (11) force on each control point this substep
+  /// Equation (11): the force on each control point this substep; once a strip is swept, the next substep's
+  /// (stepLanes adds them in place as it finds the pairs' final lengths).
+  std::vector<Vec3> spring_force_;
   std::vector<int> strip_of_point_;
   std::vector<int> margin_of_strip_;  ///< index into margins_
   std::vector<double> margins_;       ///< distinct thickness margins
@@ -388,13 +390,17 @@ class Simulator {
   std::vector<SpringPair> springs_;
   std::vector<double> spring_inv_rest2_;  ///< per spring pair, 1 / rest^2
   std::vector<int> root_springs_;         ///< the spring pairs with a root (no band pair)
-  /// The sweep (sweep_) whose stepLanes scanned every spring pair at its final length (the sweeps' scratch:
-  /// extremes, outside_bits), which the next computeSpringForces takes instead of its own scan while
-  /// nothing else has moved the hair (reset, setShape, buildBandPairs: -1).
+  /// The sweep (sweep_) whose stepLanes scanned every spring pair at its final length (the extremes in the
+  /// sweeps' scratch, the forces in spring_force_), which the next computeSpringForces takes instead of its
+  /// own scan while nothing else has moved the hair (reset, setShape, buildBandPairs: -1).
   long spring_scan_sweep_ = -1;
-  std::vector<int> spring_a_, spring_b_;  ///< per spring pair, its points (springs_[k].a, .b)
-  std::size_t spring_within_ = 0;         ///< springs_[0, spring_within_) are the pairs within strips
-  std::vector<int> spring_outside_;       ///< computeSpringForces: the pairs outside their band
+  std::vector<int> spring_a_, spring_b_;          ///< per spring pair, its points (springs_[k].a, .b)
+  std::size_t spring_within_ = 0;                 ///< springs_[0, spring_within_) are the pairs within strips
+  std::vector<int> spring_outside_;               ///< computeSpringForces: the pairs outside their band
+  std::vector<unsigned char> spring_is_outside_;  ///< computeSpringForces: per pair, whether outside
+  /// Every spring pair in the order stepLanes' sweeps add its force (buildBandPairs), which
+  /// computeSpringForces follows: each point's force summed in the same order on every path.
+  std::vector<int> spring_force_order_;
   // The sweep (sweep_) in which stepStrip gave a point its final position (the points of a strip committed
   // from the lanes are marked by strip_committed_ instead).
   std::vector<long> moved_in_step_;
@@ -411,6 +417,10 @@ class Simulator {
     /// point's, or for a pair within one strip the later of its two points' places.
     int key = 0;
     double near2 = 0.0, far2 = 0.0;  ///< squared band edges, 1e-9 relative to spare
+    /// The spring pair's own values, so that the sweep reads no array by spring index: 1 / rest^2, rest,
+    /// whether it lies within a strip, and whether its later point is springs_[spring].b (else .a).
+    double inv_rest2 = 0.0, rest = 0.0;
+    bool within = false, later_is_b = false;
   };
   std::vector<BandPair> band_pairs_;
   std::vector<int> band_pair_start_;  ///< per strip, CSR into band_pairs_
@@ -478,11 +488,10 @@ class Simulator {
     /// The current strip's body bounds (body_bounds_), or none.
     const std::vector<BodyBound>* bounds = nullptr;
     /// The spring scan of the next substep, done as the sweep finds each pair's final length (stepLanes): the
-    /// extremes of its pairs and a bit per spring pair outside its dead band (computeSpringForces reads both
-    /// sweeps' bits in pair order).
+    /// extremes of its pairs (its forces go to spring_force_).
     SpringExtremes extremes;
-    std::vector<std::uint64_t> outside_bits;
     std::vector<double> band_dist2;  ///< stepLanes: the current strip's band pairs' |a - b|^2
+    std::vector<int> band_outside;   ///< stepLanes: the current strip's band pairs outside their dead band
     int collisions = 0;              ///< segments turned out of a body in this sweep
     int exact_strips = 0;            ///< strips of this sweep that took the exact step
     StepTally tally;                 ///< this sweep's part of the substep's tally
