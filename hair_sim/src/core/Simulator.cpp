@@ -297,13 +297,15 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
       const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
       const double l2 = dist2[q - q0];
       outside[found] = q;
-      found += scanPair(w, bp.within, l2, l2 * bp.inv_rest2);
+      found += scanPair(w, bp.within, l2, l2 * band_inv_rest2_[static_cast<std::size_t>(q)]);
     }
     for (int n = 0; n < found; ++n) {
-      const BandPair& bp = band_pairs_[static_cast<std::size_t>(outside[n])];
+      const std::size_t q = static_cast<std::size_t>(outside[n]);
+      const BandPair& bp = band_pairs_[q];
       const double l2 = dist2[outside[n] - q0];
-      addSpringForce(bp.later_is_b ? bp.earlier : bp.later, bp.later_is_b ? bp.later : bp.earlier, bp.rest,
-                     new_position_.data(), spring_force_.data(), l2, l2 * bp.inv_rest2, ks, scan_lo, scan_hi);
+      addSpringForce(bp.later_is_b ? bp.earlier : bp.later, bp.later_is_b ? bp.later : bp.earlier,
+                     band_rest_[q], new_position_.data(), spring_force_.data(), l2, l2 * band_inv_rest2_[q],
+                     ks, scan_lo, scan_hi);
     }
   };
   lanes::BlockJob job;
@@ -896,6 +898,7 @@ void Simulator::buildBandPairs() {
     return k - strip_offset_[t] < hairstyle_.strips[t].columns;
   };
   std::vector<BandPair> pairs;
+  std::vector<int> pair_springs;  // of pairs
   root_springs_.clear();
   spring_scan_sweep_ = -1;
   for (std::size_t k = 0; k < springs_.size(); ++k) {
@@ -905,7 +908,6 @@ void Simulator::buildBandPairs() {
       continue;
     }
     BandPair bp;
-    bp.spring = static_cast<int>(k);
     // The later point: of the strip later in the sweep order, or within one strip the later in its numbering
     // (the sweep keys below decide the place where the pair is kept).
     const int rank_a = strip_rank_[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(p.a)])];
@@ -914,8 +916,6 @@ void Simulator::buildBandPairs() {
     bp.later = a_later ? p.a : p.b;
     bp.earlier = a_later ? p.b : p.a;
     bp.later_is_b = !a_later;
-    bp.inv_rest2 = spring_inv_rest2_[k];
-    bp.rest = p.rest;
     bp.within = k < spring_within_;
     bp.near2 = (lo * p.rest) * (lo * p.rest) * (1.0 + 1e-9);
     bp.far2 = p.within_strip ? (hi * p.rest) * (hi * p.rest) * (1.0 - 1e-9)
@@ -929,6 +929,7 @@ void Simulator::buildBandPairs() {
     const bool same_strip = strip_of_point_[static_cast<std::size_t>(bp.earlier)] == static_cast<int>(t);
     bp.key = same_strip ? std::max(sweepKey(bp.later), sweepKey(bp.earlier)) : sweepKey(bp.later);
     pairs.push_back(bp);
+    pair_springs.push_back(static_cast<int>(k));
     ++band_pair_start_[t + 1];
   }
   max_band_pairs_ = 0;
@@ -937,17 +938,27 @@ void Simulator::buildBandPairs() {
     band_pair_start_[t + 1] += band_pair_start_[t];
   }
   band_pairs_.resize(pairs.size());
+  band_inv_rest2_.resize(pairs.size());
+  band_rest_.resize(pairs.size());
+  std::vector<int> band_springs(pairs.size());  // of band_pairs_
   std::vector<int> fill(band_pair_start_.begin(), band_pair_start_.end() - 1);
-  for (const BandPair& bp : pairs)
-    band_pairs_[static_cast<std::size_t>(
-        fill[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)])]++)] = bp;
+  for (std::size_t n = 0; n < pairs.size(); ++n) {
+    const BandPair& bp = pairs[n];
+    const std::size_t q = static_cast<std::size_t>(
+        fill[static_cast<std::size_t>(strip_of_point_[static_cast<std::size_t>(bp.later)])]++);
+    const std::size_t k = static_cast<std::size_t>(pair_springs[n]);
+    band_pairs_[q] = bp;
+    band_inv_rest2_[q] = spring_inv_rest2_[k];
+    band_rest_[q] = springs_[k].rest;
+    band_springs[q] = pair_springs[n];
+  }
   // The order in which stepLanes' sweeps add the pairs' forces: strip by strip in the sweep order, each
   // strip's band pairs in order, then the pairs with a root.
   spring_force_order_.clear();
   for (const int si : sweep_order_)
     for (int q = band_pair_start_[static_cast<std::size_t>(si)];
          q < band_pair_start_[static_cast<std::size_t>(si) + 1]; ++q)
-      spring_force_order_.push_back(band_pairs_[static_cast<std::size_t>(q)].spring);
+      spring_force_order_.push_back(band_springs[static_cast<std::size_t>(q)]);
   spring_force_order_.insert(spring_force_order_.end(), root_springs_.begin(), root_springs_.end());
 }
 

@@ -412,19 +412,20 @@ class Simulator {
   /// stepLanes' band check: a spring pair by the strip of its later point, neither a root.
   struct BandPair {
     int later = 0, earlier = 0;
-    int spring = 0;  ///< its index in springs_
     /// The place in the later point's strip's sweep (column * rows + row) where the pair is kept: the later
     /// point's, or for a pair within one strip the later of its two points' places.
     int key = 0;
-    double near2 = 0.0, far2 = 0.0;  ///< squared band edges, 1e-9 relative to spare
-    /// The spring pair's own values, so that the sweep reads no array by spring index: 1 / rest^2, rest,
-    /// whether it lies within a strip, and whether its later point is springs_[spring].b (else .a).
-    double inv_rest2 = 0.0, rest = 0.0;
+    /// Whether its spring pair lies within a strip, and whether the later point is the pair's b (else a).
     bool within = false, later_is_b = false;
+    double near2 = 0.0, far2 = 0.0;  ///< squared band edges, 1e-9 relative to spare
   };
+  static_assert(sizeof(BandPair) == 32, "a band pair in half a cache line");
   std::vector<BandPair> band_pairs_;
   std::vector<int> band_pair_start_;  ///< per strip, CSR into band_pairs_
-  std::size_t max_band_pairs_ = 0;    ///< the most band pairs of one strip
+  /// Per band pair, its spring pair's 1 / rest^2 and rest (for the scan and (11): the sweep reads nothing by
+  /// spring index).
+  std::vector<double> band_inv_rest2_, band_rest_;
+  std::size_t max_band_pairs_ = 0;  ///< the most band pairs of one strip
   /// prepareBodies' quick reject of a body in the head frame, before its sphere-space test: a ball about
   /// its centre that holds it, and how far the body's motion over the substep carries a point near it.
   struct BodyBound {
