@@ -263,8 +263,10 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
   // its exact step), before any pair with it is final: a pair is final when the later of its strips in the
   // sweep order is swept, and the kernel reads a strip's forces before that (its blocks are computed first).
   // So every point's force is summed in the sweep order, the order computeSpringForces follows when it
-  // computes them itself (spring_force_order_): the same bits. The two groups share no pair, so no point's
-  // sum.
+  // computes them itself (spring_force_order_): the same bits. A point's pairs lie in its own group, or join
+  // it to the boundary (added in the boundary's sweep, after both groups), or have a root (added after every
+  // sweep): on 2 threads the two groups' sweeps never add to the same point, and their interleaving changes
+  // no point's order.
   const double ks = params_.spring_stiffness;
   const double scan_lo = params_.spring_proximity_factor, scan_hi = params_.spring_far_factor;
   const double scan_lo2 = scan_lo * scan_lo, scan_hi2 = scan_hi * scan_hi;
@@ -285,7 +287,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
       e.max_between = std::max(e.max_between, r2);
       e.min_gap2 = std::min(e.min_gap2, l2);
     }
-    return (r2 < scan_lo2) | (r2 > scan_hi2);
+    return static_cast<bool>((r2 < scan_lo2) | (r2 > scan_hi2));
   };
   // Strip si's band pairs [q0, q1) at their final lengths (dist2[q - q0]): its forces cleared, the pairs
   // scanned, then (11) for those outside (listed without a branch: they come at random).
@@ -337,12 +339,13 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
   const lanes::BlockKernel kernel = lanes::blockKernel(laneIsa(step_path_));
   const std::size_t stride = static_cast<std::size_t>(lane_stride_rows_) * W;
   const std::size_t blocks = block_rows_.size();
-  // One block of chains: reads only its own chains' state at the start of the substep, writes only their
-  // new state and its flags (on any thread).
   // Each sweep's thread its own copy of the job, of which runBlock sets the block's part (a copy per block
   // took 1 % of the step at 10,000 strips).
   std::array<lanes::BlockJob, 2> jobs{job, job};
   auto jobOf = [&](const SweepScratch& w) -> lanes::BlockJob& { return jobs[&w == &scratch_[1] ? 1 : 0]; };
+  // One block of chains: reads only its own chains' state at the start of the substep, writes only their
+  // new state and its flags (on any thread). Its chains' spring forces are still the substep's own as it is
+  // computed before any of its strips is swept (the sweeps then write the next substep's in place).
   auto runBlock = [&](lanes::BlockJob& j, std::size_t blk) {
     if (block_margin_[blk] < 0) return;  // lane_flag_ keeps kPointFull there (buildLanes)
     j.rows = block_rows_[blk];
@@ -916,7 +919,7 @@ void Simulator::buildBandPairs() {
     bp.later = a_later ? p.a : p.b;
     bp.earlier = a_later ? p.b : p.a;
     bp.later_is_b = !a_later;
-    bp.within = k < spring_within_;
+    bp.within = p.within_strip;
     bp.near2 = (lo * p.rest) * (lo * p.rest) * (1.0 + 1e-9);
     bp.far2 = p.within_strip ? (hi * p.rest) * (hi * p.rest) * (1.0 - 1e-9)
                              : std::numeric_limits<double>::infinity();

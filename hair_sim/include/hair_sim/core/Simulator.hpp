@@ -142,12 +142,12 @@ class Simulator {
   static const char* kernelInstructionSet(StepPath path);
   /// Threads for step() (1 = the calling thread only, the default): threads - 1 helper threads scan parts of
   /// the spring pairs where the sweeps have not (computeSpringForces: the Exact path, the first substep after
-  /// a reset; from kMinPairsForHelpers pairs) and, on the Lanes paths, one of them
-  /// sweeps the second group of strips (sweepGroupOf) while the calling thread sweeps the first, each with
-  /// its blocks of chains and its exact steps, the runs of blocks shared out between the two; then the
-  /// calling thread sweeps the boundary. The sweep order is the same with any count, so the hair is
-  /// bit-identical with any count; more than 2 threads only help that scan. Hairstyles of fewer than 512
-  /// chains (kMinBlocksForHelpers blocks) keep the sweeps on the calling thread. Throws
+  /// a reset, setShape or setParameters, or after a step() that threw; from kMinPairsForHelpers pairs) and,
+  /// on the Lanes paths, one of them sweeps the second group of strips (sweepGroupOf) while the calling
+  /// thread sweeps the first, each with its blocks of chains and its exact steps, the runs of blocks shared
+  /// out between the two; then the calling thread sweeps the boundary. The sweep order is the same with any
+  /// count, so the hair is bit-identical with any count; more than 2 threads only help that scan. Hairstyles
+  /// of fewer than 512 chains (kMinBlocksForHelpers blocks) keep the sweeps on the calling thread. Throws
   /// std::invalid_argument outside [1, 64].
   void setThreads(int threads);
   int threads() const;
@@ -253,7 +253,9 @@ class Simulator {
                         StepTally& tally) const;
   /// The Lanes path: every block through lanes::stepBlock, the band of every spring pair checked at the new
   /// places, the strips that passed committed, the others through stepStrip, in the sweep order
-  /// (buildSweepOrder): the two groups at once on 2 threads or more, then the boundary.
+  /// (buildSweepOrder): the two groups at once on 2 threads or more, then the boundary. The sweeps also scan
+  /// the spring pairs at their final lengths and add their forces (11) for the next substep (spring_force_,
+  /// the scratch's extremes); at the end spring_scan_sweep_ = sweep_.
   void stepLanes(const StepInputs& in, const StepFrame& f);
   /// lane_constants_ from the segment constants (buildLanes, setParameters).
   void fillLaneConstants();
@@ -392,7 +394,9 @@ class Simulator {
   std::vector<int> root_springs_;         ///< the spring pairs with a root (no band pair)
   /// The sweep (sweep_) whose stepLanes scanned every spring pair at its final length (the extremes in the
   /// sweeps' scratch, the forces in spring_force_), which the next computeSpringForces takes instead of its
-  /// own scan while nothing else has moved the hair (reset, setShape, buildBandPairs: -1).
+  /// own scan while nothing else has moved the hair (reset, setShape, buildBandPairs: -1). Set only once
+  /// stepLanes has swept every strip: after a step() that threw, the next computeSpringForces computes the
+  /// forces afresh, whatever the sweeps left in spring_force_.
   long spring_scan_sweep_ = -1;
   std::vector<int> spring_a_, spring_b_;          ///< per spring pair, its points (springs_[k].a, .b)
   std::size_t spring_within_ = 0;                 ///< springs_[0, spring_within_) are the pairs within strips
