@@ -478,12 +478,11 @@ TEST(SimulatorTest, KernelInstructionSetsFollowTheCpuFlags) {
 }
 
 TEST(SimulatorTest, HelperThreadsGiveTheSameBits) {
-  // Helper threads compute blocks of chains (each from its own chains' state at the start of the substep),
-  // sweep the second group of strips (which shares no spring pair with the first: each point's forces are
-  // added in the sweep order either way) and scan parts of the spring pairs where the sweeps have not (each
-  // into its own extremes and list): any thread count gives the same hair and the same spring measures. 600
-  // strips (300 blocks of 4 chains, over 4,096 pairs): over the 128 blocks and the pairs from which the
-  // helpers take part, and over the 64 blocks of a run that one thread computes between the strips' commits
+  // A helper thread computes blocks of chains (each from its own chains' state at the start of the substep)
+  // and sweeps the second group of strips (which shares no spring pair with the first: each point's forces
+  // are added in the sweep order either way): any thread count gives the same hair and the same spring
+  // measures. 600 strips (300 blocks of 4 chains): over the 128 blocks from which the helper takes part, and
+  // over the 64 blocks of a run that one thread computes between the strips' commits
   // (Simulator::kBlocksPerRun).
   long exact1 = 0, exact2 = 0, exact3 = 0;
   const int steps = 120, strips = 600;

@@ -1,12 +1,11 @@
 #pragma once
-/// Internal to the core: the helper threads of Simulator::setThreads. A substep hands them parts of the
-/// spring pairs to scan where the sweeps have not (computeSpringForces, each part into its own outputs) and,
-/// on the Lanes path, the sweep of the second group of strips (Simulator::stepLanes: the two groups share no
-/// spring pair and no block of chains, so they are swept at once), with the runs of blocks of chains
-/// (lanes::stepBlock, which reads only the block's own chains at the start of the substep and writes only
-/// their new state) shared between the two sweeps. Which thread computes a block does not change its result,
-/// and the sweep order does not depend on the threads, so the hair is the same bit for bit with any number of
-/// threads.
+/// Internal to the core: the helper threads of Simulator::setThreads (and HairMeshBuilder::setThreads, which
+/// hands them blocks of strips). A substep of the Lanes path hands one the sweep of the second group of
+/// strips (Simulator::stepLanes: the two groups share no spring pair and no block of chains, so they are
+/// swept at once), with the runs of blocks of chains (lanes::stepBlock, which reads only the block's own
+/// chains at the start of the substep and writes only their new state) shared between the two sweeps. Which
+/// thread computes a block does not change its result, and the sweep order does not depend on the threads, so
+/// the hair is the same bit for bit with any number of threads.
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>

@@ -224,7 +224,58 @@ inline void addSpringForce(int a, int b, double rest, const Vec3* pos, Vec3* for
   force[a] += f;
   force[b] -= f;
 }
+
+/// A spring pair at squared length l2 (r2 = l2 / rest^2) into the extremes (within a strip or between
+/// strips; a NaN never enters them: std::min / std::max); whether it is outside its dead band [lo2, hi2].
+inline bool scanSpringPair(SpringExtremes& e, bool within, double l2, double r2, double lo2, double hi2) {
+  if (within) {
+    e.min_within = std::min(e.min_within, r2);
+    e.max_within = std::max(e.max_within, r2);
+  } else {
+    e.min_between = std::min(e.min_between, r2);
+    e.max_between = std::max(e.max_between, r2);
+    e.min_gap2 = std::min(e.min_gap2, l2);
+  }
+  return static_cast<bool>((r2 < lo2) | (r2 > hi2));
+}
 }  // namespace
+
+double Simulator::bandDist2(const Vec3* pos, const BandPair& bp) {
+  return (pos[static_cast<std::size_t>(bp.later)] - pos[static_cast<std::size_t>(bp.earlier)]).squaredNorm();
+}
+
+void Simulator::finishStripSprings(std::size_t si, const double* dist2, const Vec3* pos, SpringExtremes& e,
+                                   int* outside) {
+  const double ks = params_.spring_stiffness;
+  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
+  std::fill_n(spring_force_.begin() + strip_offset_[si], hairstyle_.strips[si].pointCount(), Vec3::Zero());
+  const int q0 = band_pair_start_[si], q1 = band_pair_start_[si + 1];
+  int found = 0;
+  for (int q = q0; q < q1; ++q) {  // the pairs outside listed without a branch (they come at random)
+    const double l2 = dist2[q - q0];
+    outside[found] = q;
+    found += scanSpringPair(e, band_pairs_[static_cast<std::size_t>(q)].within, l2,
+                            l2 * band_inv_rest2_[static_cast<std::size_t>(q)], lo * lo, hi * hi);
+  }
+  for (int n = 0; n < found; ++n) {
+    const std::size_t q = static_cast<std::size_t>(outside[n]);
+    const BandPair& bp = band_pairs_[q];
+    const double l2 = dist2[outside[n] - q0];
+    addSpringForce(bp.later_is_b ? bp.earlier : bp.later, bp.later_is_b ? bp.later : bp.earlier,
+                   band_rest_[q], pos, spring_force_.data(), l2, l2 * band_inv_rest2_[q], ks, lo, hi);
+  }
+}
+
+void Simulator::finishRootSprings(const Vec3* pos, SpringExtremes& e) {
+  const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
+  for (const int k : root_springs_) {
+    const SpringPair& p = springs_[static_cast<std::size_t>(k)];
+    const double l2 = (pos[p.b] - pos[p.a]).squaredNorm();
+    const double r2 = l2 * spring_inv_rest2_[static_cast<std::size_t>(k)];
+    if (scanSpringPair(e, p.within_strip, l2, r2, lo * lo, hi * hi))
+      addSpringForce(p.a, p.b, p.rest, pos, spring_force_.data(), l2, r2, params_.spring_stiffness, lo, hi);
+  }
+}
 
 const char* Simulator::kernelInstructionSet(StepPath path) {
   return path == StepPath::Exact ? "none" : lanes::kernelName(laneIsa(path));
@@ -257,59 +308,21 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
       }
     }
 
-  // The next substep's springs (computeSpringForces), pair by pair as the sweeps find their final lengths:
-  // the extremes of the lengths, in each sweep's scratch, and (11) for the pairs outside their dead band,
-  // added to spring_force_ in place. A strip's forces are cleared once its sweep no longer reads them (after
-  // its exact step), before any pair with it is final: a pair is final when the later of its strips in the
-  // sweep order is swept, and the kernel reads a strip's forces before that (its blocks are computed first).
-  // So every point's force is summed in the sweep order, the order computeSpringForces follows when it
-  // computes them itself (spring_force_order_): the same bits. A point's pairs lie in its own group, or join
+  // The next substep's springs (computeSpringForces), strip by strip as the sweeps find their pairs' final
+  // lengths (finishStripSprings): the extremes of the lengths, in each sweep's scratch, and (11) for the
+  // pairs outside their dead band, added to spring_force_ in place. A strip's forces are cleared once its
+  // sweep no longer reads them (after its exact step), before any pair with it is final: a pair is final when
+  // the later of its strips in the sweep order is swept, and the kernel reads a strip's forces before that
+  // (its blocks are computed first). So every point's force is summed in the sweep order, as
+  // computeSpringForces sums it when it computes them itself. A point's pairs lie in its own group, or join
   // it to the boundary (added in the boundary's sweep, after both groups), or have a root (added after every
   // sweep): on 2 threads the two groups' sweeps never add to the same point, and their interleaving changes
   // no point's order.
-  const double ks = params_.spring_stiffness;
-  const double scan_lo = params_.spring_proximity_factor, scan_hi = params_.spring_far_factor;
-  const double scan_lo2 = scan_lo * scan_lo, scan_hi2 = scan_hi * scan_hi;
   for (SweepScratch& w : scratch_) {
     w.extremes = SpringExtremes();
     w.band_dist2.resize(max_band_pairs_);
     w.band_outside.resize(max_band_pairs_);
   }
-  // A pair at its final length (l2, and r2 = l2 / rest^2): its part of the extremes; whether it is outside
-  // its dead band.
-  auto scanPair = [&](SweepScratch& w, bool within, double l2, double r2) {
-    SpringExtremes& e = w.extremes;
-    if (within) {
-      e.min_within = std::min(e.min_within, r2);
-      e.max_within = std::max(e.max_within, r2);
-    } else {
-      e.min_between = std::min(e.min_between, r2);
-      e.max_between = std::max(e.max_between, r2);
-      e.min_gap2 = std::min(e.min_gap2, l2);
-    }
-    return static_cast<bool>((r2 < scan_lo2) | (r2 > scan_hi2));
-  };
-  // Strip si's band pairs [q0, q1) at their final lengths (dist2[q - q0]): its forces cleared, the pairs
-  // scanned, then (11) for those outside (listed without a branch: they come at random).
-  auto finishStrip = [&](SweepScratch& w, std::size_t si, int q0, int q1, const double* dist2) {
-    std::fill_n(spring_force_.begin() + strip_offset_[si], hairstyle_.strips[si].pointCount(), Vec3::Zero());
-    int* outside = w.band_outside.data();
-    int found = 0;
-    for (int q = q0; q < q1; ++q) {
-      const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
-      const double l2 = dist2[q - q0];
-      outside[found] = q;
-      found += scanPair(w, bp.within, l2, l2 * band_inv_rest2_[static_cast<std::size_t>(q)]);
-    }
-    for (int n = 0; n < found; ++n) {
-      const std::size_t q = static_cast<std::size_t>(outside[n]);
-      const BandPair& bp = band_pairs_[q];
-      const double l2 = dist2[outside[n] - q0];
-      addSpringForce(bp.later_is_b ? bp.earlier : bp.later, bp.later_is_b ? bp.later : bp.earlier,
-                     band_rest_[q], new_position_.data(), spring_force_.data(), l2, l2 * band_inv_rest2_[q],
-                     ks, scan_lo, scan_hi);
-    }
-  };
   lanes::BlockJob job;
   job.dt = f.dt, job.k = f.k, job.gamma = f.gamma, job.drag = f.drag;
   job.max_angle_step = params_.max_angle_step;
@@ -441,18 +454,13 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
         const int flagged = block_flags_[ch];
         if (flagged) from = std::min(from, c * s.rows + flagged);
       }
-      // A band pair's |a - b|^2 in the lanes' buffers (an earlier strip's final place is there: its lanes'
+      // The band pairs' |a - b|^2 in the lanes' buffers (an earlier strip's final place is there: its lanes'
       // result, or its exact step's, copied there below), kept in w.band_dist2 for the spring scan.
-      auto bandDist2 = [&](const BandPair& bp) {
-        return (new_position_[static_cast<std::size_t>(bp.later)] -
-                new_position_[static_cast<std::size_t>(bp.earlier)])
-            .squaredNorm();
-      };
       const int q0 = band_pair_start_[si], q1 = band_pair_start_[si + 1];
       double* band_dist2 = w.band_dist2.data();  // [q - q0]
       for (int q = q0; q < q1; ++q) {
         const BandPair& bp = band_pairs_[static_cast<std::size_t>(q)];
-        const double dist2 = bandDist2(bp);
+        const double dist2 = bandDist2(new_position_.data(), bp);
         band_dist2[q - q0] = dist2;
         // Kept by the later point of the pair in the sweep; without a branch (the pairs outside come at
         // random).
@@ -478,13 +486,13 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
           for (int i : w.exact_placed) copyBack(static_cast<std::size_t>(i));
         }
         for (int q = q0; q < q1; ++q)  // its pairs' final lengths
-          band_dist2[q - q0] = bandDist2(band_pairs_[static_cast<std::size_t>(q)]);
-        finishStrip(w, si, q0, q1, band_dist2);
+          band_dist2[q - q0] = bandDist2(new_position_.data(), band_pairs_[static_cast<std::size_t>(q)]);
+        finishStripSprings(si, band_dist2, new_position_.data(), w.extremes, w.band_outside.data());
         continue;
       }
       // Committed: the lanes' buffers hold its state at the end of the substep (made the state below).
       strip_committed_[si] = sweep_;
-      finishStrip(w, si, q0, q1, band_dist2);
+      finishStripSprings(si, band_dist2, new_position_.data(), w.extremes, w.band_outside.data());
       for (int c = 0; c < s.columns; ++c)
         max_rate2 = std::max(max_rate2, chain_max_rate2_[chain0 + static_cast<std::size_t>(c)]);
     }
@@ -549,16 +557,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
   rate_.swap(new_rate_);
   velocity_.swap(new_velocity_);
   // The pairs with a root (no band pair) at the state's places: the scan is then whole.
-  for (int k : root_springs_) {
-    const std::size_t kk = static_cast<std::size_t>(k);
-    const double l2 = (positions_[static_cast<std::size_t>(spring_b_[kk])] -
-                       positions_[static_cast<std::size_t>(spring_a_[kk])])
-                          .squaredNorm();
-    const double r2 = l2 * spring_inv_rest2_[kk];
-    if (scanPair(scratch_[0], kk < spring_within_, l2, r2))
-      addSpringForce(spring_a_[kk], spring_b_[kk], springs_[kk].rest, positions_.data(), spring_force_.data(),
-                     l2, r2, ks, scan_lo, scan_hi);
-  }
+  finishRootSprings(positions_.data(), scratch_[0].extremes);
   spring_scan_sweep_ = sweep_;
 }
 
@@ -817,24 +816,9 @@ void Simulator::buildSprings() {
     ++partner_start_[static_cast<std::size_t>(p.b) + 1];
   }
   for (std::size_t k = 0; k < n; ++k) partner_start_[k + 1] += partner_start_[k];
-  // The pairs as computeSpringForces' scan reads them: the ends and 1 / rest^2 in arrays, those within strips
-  // first (buildSprings adds them first).
-  const std::size_t count = springs_.size();
-  spring_inv_rest2_.resize(count);
-  spring_a_.resize(count);
-  spring_b_.resize(count);
-  spring_outside_.resize(count);
-  spring_within_ = 0;
-  for (std::size_t k = 0; k < count; ++k) {
-    const SpringPair& p = springs_[k];
-    spring_inv_rest2_[k] = 1.0 / (p.rest * p.rest);
-    spring_a_[k] = p.a;
-    spring_b_[k] = p.b;
-    if (p.within_strip) {
-      if (spring_within_ != k) throw std::logic_error("Simulator::buildSprings: a pair within a strip last");
-      ++spring_within_;
-    }
-  }
+  spring_inv_rest2_.resize(springs_.size());
+  for (std::size_t k = 0; k < springs_.size(); ++k)
+    spring_inv_rest2_[k] = 1.0 / (springs_[k].rest * springs_[k].rest);
   partner_index_.assign(static_cast<std::size_t>(partner_start_[n]), 0);
   partner_rest_.assign(static_cast<std::size_t>(partner_start_[n]), 0.0);
   partner_strip_.assign(static_cast<std::size_t>(partner_start_[n]), 0);
@@ -943,7 +927,6 @@ void Simulator::buildBandPairs() {
   band_pairs_.resize(pairs.size());
   band_inv_rest2_.resize(pairs.size());
   band_rest_.resize(pairs.size());
-  std::vector<int> band_springs(pairs.size());  // of band_pairs_
   std::vector<int> fill(band_pair_start_.begin(), band_pair_start_.end() - 1);
   for (std::size_t n = 0; n < pairs.size(); ++n) {
     const BandPair& bp = pairs[n];
@@ -953,119 +936,40 @@ void Simulator::buildBandPairs() {
     band_pairs_[q] = bp;
     band_inv_rest2_[q] = spring_inv_rest2_[k];
     band_rest_[q] = springs_[k].rest;
-    band_springs[q] = pair_springs[n];
   }
-  // The order in which stepLanes' sweeps add the pairs' forces: strip by strip in the sweep order, each
-  // strip's band pairs in order, then the pairs with a root.
-  spring_force_order_.clear();
-  for (const int si : sweep_order_)
-    for (int q = band_pair_start_[static_cast<std::size_t>(si)];
-         q < band_pair_start_[static_cast<std::size_t>(si) + 1]; ++q)
-      spring_force_order_.push_back(band_springs[static_cast<std::size_t>(q)]);
-  spring_force_order_.insert(spring_force_order_.end(), root_springs_.begin(), root_springs_.end());
 }
-
-namespace {
-
-/// The extremes of computeSpringForces over the spring pairs: (length / rest)^2 within strips and between
-/// strips, and the smallest squared length between strips. A NaN never enters them (std::min / std::max).
-/// computeSpringForces' scan of pairs [begin, end) (pairs below `within` are within strips, the others
-/// between them): pair k joins points a[k] and b[k], r2 = |positions[b] - positions[a]|^2 inv_rest2[k].
-/// Updates the extremes and writes the pairs outside the band (r2 < lo2 or r2 > hi2) to `outside` in order;
-/// returns how many. (Scalar: in lanes of AVX2, gathering the points, it took more time on this machine.)
-template <bool kBetween>
-std::size_t scanSpringRange(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
-                            std::size_t begin, std::size_t end, double lo2, double hi2, double& min_r2,
-                            double& max_r2, double& min_l2, int* outside, std::size_t found) {
-  for (std::size_t k = begin; k < end; ++k) {
-    const double l2 = (positions[b[k]] - positions[a[k]]).squaredNorm();
-    const double r2 = l2 * inv_rest2[k];
-    min_r2 = std::min(min_r2, r2);
-    max_r2 = std::max(max_r2, r2);
-    if constexpr (kBetween) min_l2 = std::min(min_l2, l2);
-    // Listed without a branch (about one pair in eight is outside at 10,000 strips, at random): always
-    // written, counted only when outside.
-    outside[found] = static_cast<int>(k);
-    found += static_cast<std::size_t>((r2 < lo2) | (r2 > hi2));
-  }
-  return found;
-}
-
-std::size_t scanSprings(const Vec3* positions, const int* a, const int* b, const double* inv_rest2,
-                        std::size_t begin, std::size_t within, std::size_t end, double lo2, double hi2,
-                        SpringExtremes& e, int* outside) {
-  double unused = 0.0;
-  const std::size_t split = std::min(std::max(begin, within), end);
-  const std::size_t found = scanSpringRange<false>(positions, a, b, inv_rest2, begin, split, lo2, hi2,
-                                                   e.min_within, e.max_within, unused, outside, 0);
-  return scanSpringRange<true>(positions, a, b, inv_rest2, split, end, lo2, hi2, e.min_between, e.max_between,
-                               e.min_gap2, outside, found);
-}
-
-}  // namespace
 
 void Simulator::computeSpringForces() {
-  // The scan finds the extremes and the pairs outside their dead band (most pairs are within it: no square
-  // root, no division); then (11) for those. When the last substep took the lanes and nothing has moved the
-  // hair since, stepLanes' sweeps did both as they found each pair's final length: the forces are in
-  // spring_force_ and the extremes in the sweeps' scratch. Else scanSprings here from the points, with helper
-  // threads in as many parts as threads, each part into its own extremes and its own stretch of
-  // spring_outside_, then (11) for the pairs outside in the order the sweeps add them (spring_force_order_:
-  // every point's force summed in the same order, so the same bits).
-  const std::size_t count = springs_.size();
+  // (11) for the pairs outside their dead band (most pairs are within it: no square root, no division) and
+  // the extremes of the pairs' lengths. When the last substep took the lanes and nothing has moved the hair
+  // since, stepLanes' sweeps did both as they found each pair's final length: the forces are in
+  // spring_force_ and the extremes in the sweeps' scratch. Else here from the points, strip by strip in the
+  // sweep order as the sweeps do it (finishStripSprings, then finishRootSprings): every point's force summed
+  // in the same order, so the same bits.
   SpringExtremes e;
-  auto merge = [](SpringExtremes& into, const SpringExtremes& from) {
-    into.min_within = std::min(into.min_within, from.min_within);
-    into.max_within = std::max(into.max_within, from.max_within);
-    into.min_between = std::min(into.min_between, from.min_between);
-    into.max_between = std::max(into.max_between, from.max_between);
-    into.min_gap2 = std::min(into.min_gap2, from.min_gap2);
+  auto merge = [&e](const SpringExtremes& from) {
+    e.min_within = std::min(e.min_within, from.min_within);
+    e.max_within = std::max(e.max_within, from.max_within);
+    e.min_between = std::min(e.min_between, from.min_between);
+    e.max_between = std::max(e.max_between, from.max_between);
+    e.min_gap2 = std::min(e.min_gap2, from.min_gap2);
   };
   if (spring_scan_sweep_ == sweep_) {
-    merge(e, scratch_[0].extremes);
-    merge(e, scratch_[1].extremes);
+    merge(scratch_[0].extremes);
+    merge(scratch_[1].extremes);
   } else {
-    LaneWorkers* workers = count >= kMinPairsForHelpers ? workers_.get() : nullptr;
-    const std::size_t parts = workers ? static_cast<std::size_t>(threads()) : 1;
-    struct Part {
-      std::size_t begin = 0, end = 0, found = 0;
-      SpringExtremes e;
-    };
-    std::array<Part, 64> part;
-    const double lo = params_.spring_proximity_factor, hi = params_.spring_far_factor;
-    for (std::size_t c = 0; c < parts; ++c) {
-      part[c].begin = count * c / parts;
-      part[c].end = count * (c + 1) / parts;
+    SweepScratch& w = scratch_[0];
+    w.band_dist2.resize(max_band_pairs_);
+    w.band_outside.resize(max_band_pairs_);
+    for (const int strip : sweep_order_) {
+      const std::size_t si = static_cast<std::size_t>(strip);
+      const int q0 = band_pair_start_[si], q1 = band_pair_start_[si + 1];
+      for (int q = q0; q < q1; ++q)
+        w.band_dist2[static_cast<std::size_t>(q - q0)] =
+            bandDist2(positions_.data(), band_pairs_[static_cast<std::size_t>(q)]);
+      finishStripSprings(si, w.band_dist2.data(), positions_.data(), e, w.band_outside.data());
     }
-    auto scan = [&](std::size_t c) {
-      Part& pc = part[c];
-      pc.found = scanSprings(positions_.data(), spring_a_.data(), spring_b_.data(), spring_inv_rest2_.data(),
-                             pc.begin, spring_within_, pc.end, lo * lo, hi * hi, pc.e,
-                             spring_outside_.data() + pc.begin);
-    };
-    if (workers) {
-      workers->start(
-          parts, [](void* run, std::size_t c) { (*static_cast<decltype(scan)*>(run))(c); }, &scan);
-      workers->finish();
-    } else {
-      scan(0);
-    }
-    spring_is_outside_.assign(count, 0);
-    for (std::size_t c = 0; c < parts; ++c) {
-      merge(e, part[c].e);
-      for (std::size_t n = part[c].begin, end = part[c].begin + part[c].found; n < end; ++n)
-        spring_is_outside_[static_cast<std::size_t>(spring_outside_[n])] = 1;
-    }
-    std::fill(spring_force_.begin(), spring_force_.end(), Vec3::Zero());
-    const Vec3* pos = positions_.data();
-    for (const int k : spring_force_order_) {
-      const std::size_t kk = static_cast<std::size_t>(k);
-      if (!spring_is_outside_[kk]) continue;
-      const SpringPair& p = springs_[kk];
-      const double l2 = (pos[p.b] - pos[p.a]).squaredNorm();
-      addSpringForce(p.a, p.b, p.rest, pos, spring_force_.data(), l2, l2 * spring_inv_rest2_[kk],
-                     params_.spring_stiffness, lo, hi);
-    }
+    finishRootSprings(positions_.data(), e);
   }
   auto ratio = [](double r2, double none) { return r2 == none ? 1.0 : std::sqrt(r2); };
   min_ratio_[0] = ratio(e.min_between, 1e300), max_ratio_[0] = ratio(e.max_between, 0.0);

@@ -140,15 +140,13 @@ class Simulator {
   /// (the baseline; "baseline" on other architectures); "none" for the Exact path. (Benchmarks name it: the
   /// same code is slower without AVX-512.)
   static const char* kernelInstructionSet(StepPath path);
-  /// Threads for step() (1 = the calling thread only, the default): threads - 1 helper threads scan parts of
-  /// the spring pairs where the sweeps have not (computeSpringForces: the Exact path, the first substep after
-  /// a reset, setShape or setParameters, or after a step() that threw; from kMinPairsForHelpers pairs) and,
-  /// on the Lanes paths, one of them sweeps the second group of strips (sweepGroupOf) while the calling
-  /// thread sweeps the first, each with its blocks of chains and its exact steps, the runs of blocks shared
-  /// out between the two; then the calling thread sweeps the boundary. The sweep order is the same with any
-  /// count, so the hair is bit-identical with any count; more than 2 threads only help that scan. Hairstyles
-  /// of fewer than 512 chains (kMinBlocksForHelpers blocks) keep the sweeps on the calling thread. Throws
-  /// std::invalid_argument outside [1, 64].
+  /// Threads for step() (1 = the calling thread only, the default): on the Lanes paths a helper thread sweeps
+  /// the second group of strips (sweepGroupOf) while the calling thread sweeps the first, each with its
+  /// blocks of chains and its exact steps, the runs of blocks shared out between the two; then the calling
+  /// thread sweeps the boundary. The sweep order is the same with any count, so the hair is bit-identical
+  /// with any count; more than 2 threads do not speed the step. Hairstyles of fewer than 512 chains
+  /// (kMinBlocksForHelpers blocks) keep the sweeps on the calling thread. Throws std::invalid_argument
+  /// outside [1, 64].
   void setThreads(int threads);
   int threads() const;
   /// The sweep group of strip s (every path sweeps the strips in this order, strip order within a group):
@@ -212,6 +210,7 @@ class Simulator {
  private:
   struct SweepScratch;  // (below: the exact step's working state, one per concurrent sweep)
   struct BodyBound;
+  struct BandPair;
   void buildChains();
   /// The blocks of chains for the Lanes path (after buildChains).
   void buildLanes();
@@ -289,7 +288,20 @@ class Simulator {
   void buildSweepOrder();
   /// band_pairs_ from springs_, the sweep order and the band's factors (end of buildSprings, setParameters).
   void buildBandPairs();
+  /// The springs of the substep: (11) into spring_force_ and the extremes of the pairs' lengths
+  /// (min_ratio_, max_ratio_, min_gap_), from stepLanes' sweeps when they found them, else from the points.
   void computeSpringForces();
+  /// A band pair's |later - earlier|^2 at the places pos.
+  static double bandDist2(const Vec3* pos, const BandPair& bp);
+  /// Strip si's band pairs at their lengths dist2[q - band_pair_start_[si]] between the points at pos: the
+  /// strip's spring forces cleared, the pairs into the extremes e, then (11) for those outside their dead
+  /// band added to spring_force_ (`outside`: room for the strip's pairs). stepLanes' sweeps call it as each
+  /// strip is final, computeSpringForces strip by strip in the sweep order: each point's forces are summed
+  /// in the same order either way.
+  void finishStripSprings(std::size_t si, const double* dist2, const Vec3* pos, SpringExtremes& e,
+                          int* outside);
+  /// The same for the pairs with a root (root_springs_), after every strip.
+  void finishRootSprings(const Vec3* pos, SpringExtremes& e);
   /// The valid direction nearest to dir on the arc toward an escape direction (the ITP method on testMargin,
   /// each probe decided by clearOf's tests, prepareBodies first) for the bodies.
   Vec3 escapeBodies(SweepScratch& w, const Vec3& pivot, double d, const Vec3& dir,
@@ -398,13 +410,6 @@ class Simulator {
   /// stepLanes has swept every strip: after a step() that threw, the next computeSpringForces computes the
   /// forces afresh, whatever the sweeps left in spring_force_.
   long spring_scan_sweep_ = -1;
-  std::vector<int> spring_a_, spring_b_;          ///< per spring pair, its points (springs_[k].a, .b)
-  std::size_t spring_within_ = 0;                 ///< springs_[0, spring_within_) are the pairs within strips
-  std::vector<int> spring_outside_;               ///< computeSpringForces: the pairs outside their band
-  std::vector<unsigned char> spring_is_outside_;  ///< computeSpringForces: per pair, whether outside
-  /// Every spring pair in the order stepLanes' sweeps add its force (buildBandPairs), which
-  /// computeSpringForces follows: each point's force summed in the same order on every path.
-  std::vector<int> spring_force_order_;
   // The sweep (sweep_) in which stepStrip gave a point its final position (the points of a strip committed
   // from the lanes are marked by strip_committed_ instead).
   std::vector<long> moved_in_step_;
@@ -546,9 +551,6 @@ class Simulator {
   /// their strips (256 chains: about 0.4 MB of state read and written, within a core's L2). At 10,000 strips
   /// 0.952 x the time of one pass over every block first; one block at a time was 1.09-1.14 x.
   static constexpr std::size_t kBlocksPerRun = 64;
-  /// computeSpringForces' scan on the helper threads from this many pairs (about kMinBlocksForHelpers'
-  /// strips).
-  static constexpr std::size_t kMinPairsForHelpers = 4096;
 };
 
 /// Rotation vector that turns unit a onto unit b (axis a x b, angle in [0, pi]); a deterministic
