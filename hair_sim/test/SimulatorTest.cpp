@@ -844,8 +844,13 @@ TEST(SimulatorTest, SpringForcesComputedAfreshGiveTheSweepsBits) {
     HeadMotionEstimator head;
     head.reset(rest);
     for (int i = 0; i < 120; ++i) {
-      if (afresh && i % 3 == 0) sim.setParameters(PhysicsParameters(sim.parameters()));
+      const bool set = afresh && i % 3 == 0;
+      if (set) sim.setParameters(PhysicsParameters(sim.parameters()));
       sim.step(shakeInputs(config, rest, i, 1.0, head, sim.parameters().substep));
+      // Which way ran: afresh on the first substep and after setParameters, else the sweeps' (so that both
+      // ways are compared here, not one with itself).
+      EXPECT_EQ(i > 0 && !set, sim.springForcesFromSweeps())
+          << "substep " << i << ", " << threads << " threads";
     }
     return sim.positionsHead();
   };
@@ -856,6 +861,32 @@ TEST(SimulatorTest, SpringForcesComputedAfreshGiveTheSweepsBits) {
     EXPECT_EQ(0, std::memcmp(other.data(), reference.data(), other.size() * sizeof(Vec3)))
         << threads << " threads";
   }
+  // The other ways to the fresh computation: the Exact path (no sweeps of the lanes), reset and setShape.
+  Simulator sim(style, config.physics, config.bodies);
+  HeadMotionEstimator head;
+  head.reset(rest);
+  int i = 0;
+  auto step = [&] { sim.step(shakeInputs(config, rest, i++, 1.0, head, sim.parameters().substep)); };
+  step();
+  step();
+  EXPECT_TRUE(sim.springForcesFromSweeps());
+  sim.setStepPath(Simulator::StepPath::Exact);
+  step();  // (the sweeps of the substep before still count)
+  EXPECT_TRUE(sim.springForcesFromSweeps());
+  step();
+  EXPECT_FALSE(sim.springForcesFromSweeps());
+  sim.setStepPath(Simulator::StepPath::Lanes);
+  step();
+  EXPECT_FALSE(sim.springForcesFromSweeps());
+  step();
+  EXPECT_TRUE(sim.springForcesFromSweeps());
+  sim.reset();
+  step();
+  EXPECT_FALSE(sim.springForcesFromSweeps());
+  step();
+  sim.setShape(sim.positionsHead());
+  step();
+  EXPECT_FALSE(sim.springForcesFromSweeps());
 }
 
 TEST(SimulatorTest, SetParametersStiffnessChangesTheHingeFrequency) {

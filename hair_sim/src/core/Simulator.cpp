@@ -954,7 +954,8 @@ void Simulator::computeSpringForces() {
     e.max_between = std::max(e.max_between, from.max_between);
     e.min_gap2 = std::min(e.min_gap2, from.min_gap2);
   };
-  if (spring_scan_sweep_ == sweep_) {
+  springs_from_sweeps_ = spring_scan_sweep_ == sweep_;
+  if (springs_from_sweeps_) {
     merge(scratch_[0].extremes);
     merge(scratch_[1].extremes);
   } else {
@@ -1719,6 +1720,7 @@ void Simulator::step(const StepInputs& in) {
     for (std::size_t m = 0; m < margins_.size(); ++m)
       bodies_now_[m] = bodiesInHeadFrame(in.head.pose, in.body_frames, margins_[m]);
   }
+  springs_from_sweeps_ = false;
   if (!springs_.empty()) computeSpringForces();
   if (!bodies_.empty()) {
     body_bounds_.resize(margins_.size());

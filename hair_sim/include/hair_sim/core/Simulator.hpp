@@ -163,6 +163,11 @@ class Simulator {
   }
   /// Strips the last step() gave to the exact per-strip step (all of them on the Exact path).
   int exactStripCount() const { return exact_strips_; }
+  /// Whether the last step() took the springs' forces (11) and the spring ratios from the sweeps of the step
+  /// before it (a Lanes path, nothing having moved the hair since: no reset, setShape or setParameters, and
+  /// that step did not throw) instead of computing them from the points. Both ways give the same bits; this
+  /// says which one ran (false with no springs).
+  bool springForcesFromSweeps() const { return springs_from_sweeps_; }
 
   const Hairstyle& hairstyle() const { return hairstyle_; }
   const PhysicsParameters& parameters() const { return params_; }
@@ -410,6 +415,7 @@ class Simulator {
   /// stepLanes has swept every strip: after a step() that threw, the next computeSpringForces computes the
   /// forces afresh, whatever the sweeps left in spring_force_.
   long spring_scan_sweep_ = -1;
+  bool springs_from_sweeps_ = false;  ///< springForcesFromSweeps()
   // The sweep (sweep_) in which stepStrip gave a point its final position (the points of a strip committed
   // from the lanes are marked by strip_committed_ instead).
   std::vector<long> moved_in_step_;
