@@ -233,6 +233,62 @@ TEST(EventScheduleTest, BadEventsAreNamed) {
   w.vector = Vec3(0, 0, INFINITY);
   EXPECT_NE(test::errorOf([&] { EventSchedule().add(w, "msg"); }).find("velocity: [0, 0, inf]"),
             std::string::npos);
+  // Each check by its field and value, "<type> event: <field>: <value> ..."; where cheap, a value just
+  // inside the limit is accepted, so that the limit itself is pinned.
+  auto add = [](const Event& event) { EventSchedule().add(event, "msg"); };
+  w = Event();
+  w.duration = -2.5;
+  test::expectInvalid([&] { add(w); }, "wind event: duration: -2.5");
+  e = gust(1);
+  e.period = 1e-3;
+  EXPECT_NO_THROW(add(e));
+  e.period = 5e-4;
+  test::expectInvalid([&] { add(e); }, "wind_gust event: period: 0.0005");
+  e = gust(1);
+  e.vector = Vec3::Zero();  // no mean speed: no direction for the gusts
+  test::expectInvalid([&] { add(e); }, "wind_gust event: mean: [0, 0, 0]");
+  Event t;
+  t.type = EventType::Turbulence;
+  t.intensity = 1.0;
+  t.length_scale = 1e-3;
+  EXPECT_NO_THROW(add(t));
+  t.length_scale = 2e-4;
+  test::expectInvalid([&] { add(t); }, "turbulence event: length_scale: 0.0002");
+  t.length_scale = 0.5;
+  t.time_scale = 1000.0;
+  EXPECT_NO_THROW(add(t));
+  t.time_scale = 2000.0;
+  test::expectInvalid([&] { add(t); }, "turbulence event: time_scale: 2000");
+  Event g;
+  g.type = EventType::Gravity;
+  g.vector = Vec3(60.0, 0.0, 80.0);  // exactly 100 m/s^2
+  EXPECT_NO_THROW(add(g));
+  g.vector = Vec3(0.0, 0.0, -101.0);
+  test::expectInvalid([&] { add(g); }, "gravity event: acceleration: [0, 0, -101]");
+  // Nod, shake and tilt swing within +-pi/2 rad (1.5708 rad); a turn holds within +-pi rad.
+  for (EventType type : {EventType::Nod, EventType::Shake, EventType::Tilt}) {
+    Event h;
+    h.type = type;
+    const std::string name = eventTypeName(type);
+    for (double amplitude : {1.57, -1.57}) {
+      h.amplitude = amplitude;
+      EXPECT_NO_THROW(add(h)) << name << " " << amplitude;
+    }
+    h.amplitude = 1.58;
+    test::expectInvalid([&] { add(h); }, name + " event: amplitude: 1.58");
+    h.amplitude = -1.58;
+    test::expectInvalid([&] { add(h); }, name + " event: amplitude: -1.58");
+  }
+  Event turn;
+  turn.type = EventType::Turn;
+  for (double amplitude : {3.0, -3.0}) {
+    turn.amplitude = amplitude;
+    EXPECT_NO_THROW(add(turn)) << amplitude;
+  }
+  turn.amplitude = 3.2;
+  test::expectInvalid([&] { add(turn); }, "turn event: amplitude: 3.2");
+  turn.amplitude = -3.2;
+  test::expectInvalid([&] { add(turn); }, "turn event: amplitude: -3.2");
 }
 
 TEST(EventScheduleTest, MalformedEventsInAScenarioAreNamed) {
