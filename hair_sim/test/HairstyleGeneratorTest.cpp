@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 
 #include "TestUtil.hpp"
@@ -94,6 +95,27 @@ TEST(HairstyleGeneratorTest, RejectsBadOptions) {
   o = GeneratorOptions();
   o.strips = 0;
   EXPECT_NE(test::errorOf([&] { generateHairstyle(kScalp, o); }).find("strips 0"), std::string::npos);
+  o = GeneratorOptions();
+  o.rings = 0;
+  test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "rings 0 < 1");
+  o = GeneratorOptions();
+  o.columns = 1;
+  test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "columns 1 < 2");
+  // The lengths' message names neither the option nor its value, only the rule.
+  for (double bad : {0.0, -0.12, std::nan("")}) {
+    o = GeneratorOptions();
+    o.length_front = bad;
+    test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "hair lengths must be > 0");
+    o = GeneratorOptions();
+    o.length_back = bad;
+    test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "hair lengths must be > 0");
+  }
+  // Just inside the limits: one ring, hair a millimetre long.
+  o = GeneratorOptions();
+  o.rings = 1;
+  o.length_front = 1e-3;
+  o.length_back = 1e-3;
+  EXPECT_NO_THROW(generateHairstyle(kScalp, o));
 }
 
 }  // namespace
