@@ -47,22 +47,11 @@ double maxLengthError(const Simulator& sim) {
   return worst;
 }
 
-/// Deepest control point inside a body inflated by its strip's margin (0 = none), from the geometry.
+/// Deepest control point inside a body inflated by its strip's margin (0 = none), from the geometry
+/// (test::deepestInside: a lower bound on the depth, 0 exactly when no point is inside).
 double deepest(const Simulator& sim, const SimConfig& config, const Iso3& head) {
-  double worst = 0.0;
-  const std::vector<Vec3>& x = sim.positionsHead();
-  const std::vector<int>& offsets = sim.stripOffsets();
-  for (std::size_t s = 0; s < sim.hairstyle().strips.size(); ++s) {
-    const Strip& strip = sim.hairstyle().strips[s];
-    const std::vector<Ellipsoid> bodies =
-        sim.bodiesInHeadFrame(head, bodyFrames(config, head), strip.thickness_margin);
-    for (int p = strip.columns; p < strip.pointCount(); ++p)  // row 0: the roots, on the scalp
-      for (const Ellipsoid& e : bodies) {
-        const Vec3& q = x[static_cast<std::size_t>(offsets[s] + p)];
-        if (e.contains(q)) worst = std::max(worst, -e.closestPoint(q).signed_distance);
-      }
-  }
-  return worst;
+  return test::deepestInside(sim.positionsHead(), sim.stripOffsets(), sim.hairstyle(), config.bodies, head,
+                             bodyFrames(config, head));
 }
 
 bool allFinite(const Simulator& sim) {

@@ -85,12 +85,17 @@ TEST(SimulatorCollisionTest, ReactionConstraintHoldsHairOnABodyWithoutPenetratio
     sim.step(in);
     ASSERT_EQ(sim.maxPenetration(), 0.0) << "step " << i;
     ASSERT_EQ(sim.penetrationCount(), 0) << "step " << i;
+    ASSERT_EQ(test::deepestInside(sim.positionsHead(), sim.stripOffsets(), sim.hairstyle(), {ball},
+                                  Iso3::Identity(), in.body_frames),
+              0.0)
+        << "step " << i;
   }
   // The hair drapes: some point lies on the inflated surface (within 1 mm), none inside.
   const Ellipsoid inflated = ball.shape.inflated(style.strips[0].thickness_margin);
   double nearest = 1.0;
   for (std::size_t k = 2; k < sim.positionsHead().size(); ++k)
-    nearest = std::min(nearest, std::abs(inflated.closestPoint(sim.positionsHead()[k]).signed_distance));
+    nearest = std::min(nearest, inflated.closestPoint(sim.positionsHead()[k]).signed_distance);
+  EXPECT_GE(nearest, -1e-12);
   EXPECT_LT(nearest, 1e-3);
 }
 
@@ -193,10 +198,24 @@ TEST(SimulatorCollisionTest, ViolentHeadShakeWithWindOntoHeadAndShouldersNeverPe
   // Wind from the front and above blows the hair back and down onto the head, neck and shoulders.
   scenario.wind = {{0.0, Vec3::Zero()}, {0.5, Vec3(-3.0, 0.0, -2.0)}};
   OfflineRunner runner(config, loadHairstyle(config.hairstyle_file), scenario);
-  const RunSummary summary = runner.run(nullptr);
+  // At every output frame, from the geometry as well (the world points: the head pose is the identity
+  // there, the bodies of the head frame go with the head, the others stay in the world).
+  double deepest = 0.0;
+  int frames = 0;
+  const RunSummary summary = runner.run([&](const OutputFrame& f) {
+    std::vector<Iso3> body_frames;
+    for (const Body& b : config.bodies)
+      body_frames.push_back(b.frame == config.head_frame ? f.head_pose : Iso3::Identity());
+    deepest = std::max(
+        deepest, test::deepestInside(*f.points_world, f.simulator->stripOffsets(), f.simulator->hairstyle(),
+                                     config.bodies, Iso3::Identity(), body_frames));
+    ++frames;
+  });
   EXPECT_TRUE(summary.all_finite);
   EXPECT_GT(summary.collisions, 1000) << "the hair must actually be thrown onto the bodies";
   EXPECT_LE(summary.max_penetration_m, 1e-9);
+  EXPECT_GT(frames, 10);
+  EXPECT_LE(deepest, 1e-9);
   // Every strip keeps its width within the spring band throughout.
   EXPECT_GT(summary.max_width_ratio, 1.0);
   EXPECT_LE(summary.max_width_ratio, config.physics.spring_far_factor + 1e-9);

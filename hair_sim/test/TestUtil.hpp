@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -83,6 +84,31 @@ inline std::vector<Body> axisBalls(const Vec3& o, double c, double negative, dou
                             Ellipsoid(o + sign * c * Vec3::Unit(axis), Mat3::Identity(),
                                       Vec3::Constant(sign > 0.0 ? positive : negative))});
   return bodies;
+}
+
+/// How far the deepest control point below the roots lies inside a body inflated by its strip's thickness
+/// margin (m; 0: none inside), from the geometry alone, without the Simulator's bodies or counters: each
+/// point (head frame, `points`, strip by strip as `offsets`) taken to the world by `head_pose`, into body
+/// b's frame by body_frames[b] and into its shape's axes, then against the radii + margin. The depth is
+/// (1 - |q|) times the smallest radius, q the point in the unit sphere's space: no more than the true depth.
+inline double deepestInside(const std::vector<Vec3>& points, const std::vector<int>& offsets,
+                            const Hairstyle& style, const std::vector<Body>& bodies, const Iso3& head_pose,
+                            const std::vector<Iso3>& body_frames) {
+  double worst = 0.0;
+  for (std::size_t s = 0; s < style.strips.size(); ++s) {
+    const Strip& strip = style.strips[s];
+    for (int p = strip.columns; p < strip.pointCount(); ++p) {  // row 0: the roots, on the scalp
+      const Vec3 world = head_pose * points[static_cast<std::size_t>(offsets[s] + p)];
+      for (std::size_t b = 0; b < bodies.size(); ++b) {
+        const Ellipsoid& shape = bodies[b].shape;
+        const Vec3 radii = shape.radii().array() + strip.thickness_margin;
+        const Vec3 local = shape.rotation().transpose() * (body_frames[b].inverse() * world - shape.center());
+        const double q = local.cwiseQuotient(radii).norm();
+        if (q < 1.0) worst = std::max(worst, (1.0 - q) * radii.minCoeff());
+      }
+    }
+  }
+  return worst;
 }
 
 /// Runs f and returns the std::invalid_argument message it throws (fails the test if none).
