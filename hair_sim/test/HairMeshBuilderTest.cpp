@@ -167,5 +167,53 @@ TEST(HairMeshBuilderTest, HelperThreadsBuildTheSameMeshes) {
   }
 }
 
+TEST(HairMeshBuilderTest, BuildRejectsBadStripOffsetsAndBuildsAfterwards) {
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  const Hairstyle style = loadHairstyle(config.hairstyle_file);
+  ASSERT_EQ(style.strips.size(), 100u);
+  std::vector<Vec3> points;
+  std::vector<int> offsets;
+  for (const Strip& s : style.strips) {
+    offsets.push_back(static_cast<int>(points.size()));
+    points.insert(points.end(), s.points.begin(), s.points.end());
+  }
+  ASSERT_EQ(points.size(), 1000u);  // 100 strips of 2 x 5 control points
+  const std::vector<Ellipsoid> bodies{
+      Ellipsoid(style.scalp.center(), style.scalp.rotation(), style.scalp.radii() * 1.06)};
+  HairMeshOptions options;
+  options.level_of_detail = LevelOfDetail{3, 5};
+  HairMeshBuilder builder(style, options);
+  builder.build(points, offsets, style.scalp, bodies);
+  // Each strip of 2 x 5 control points: (1 x 3 + 1) x (4 x 5 + 1) vertices.
+  ASSERT_EQ(builder.vertexCount(), 100 * 4 * 21);
+  ASSERT_GT(builder.projectedVertices(), 0);  // the surface dips into the body: projections to compare
+  auto rejects = [&](const std::vector<Vec3>& p, const std::vector<int>& o, const std::string& text) {
+    test::expectInvalid([&] { builder.build(p, o, style.scalp, bodies); }, text);
+  };
+  // A wrong number of offsets: the counts of both.
+  std::vector<int> bad(offsets.begin(), offsets.end() - 1);
+  rejects(points, bad, "99 strip offsets for 100 strips");
+  bad = offsets;
+  bad.push_back(1000);
+  rejects(points, bad, "101 strip offsets for 100 strips");
+  rejects(points, {}, "0 strip offsets for 100 strips");
+  // Offsets past the points (cut short, or an offset too far or negative): the strip.
+  const std::vector<Vec3> short_points(points.begin(), points.end() - 1);
+  rejects(short_points, offsets, "too few points for strip 99");
+  bad = offsets;
+  bad[40] = 995;  // strip 40's 10 points would end at 1005
+  rejects(points, bad, "too few points for strip 40");
+  bad[40] = offsets[40];
+  bad[7] = -1;
+  rejects(points, bad, "too few points for strip 7");
+  // The failed builds left the meshes alone, and a good build gives what a fresh builder gives.
+  EXPECT_EQ(builder.vertexCount(), 100 * 4 * 21);
+  builder.build(points, offsets, style.scalp, bodies);
+  EXPECT_EQ(builder.vertexCount(), 100 * 4 * 21);
+  HairMeshBuilder fresh(style, options);
+  fresh.build(points, offsets, style.scalp, bodies);
+  EXPECT_TRUE(sameBuild(builder, fresh));
+}
+
 }  // namespace
 }  // namespace hair_sim
