@@ -39,6 +39,34 @@ TEST(HairstyleTest, LoadsAndRoundTripsBitIdentically) {
   EXPECT_EQ(0, std::memcmp(a.strips[0].points.data(), b.strips[0].points.data(), 8 * sizeof(Vec3)));
   EXPECT_EQ(a.scalp.radii(), b.scalp.radii());
   EXPECT_FLOAT_EQ(b.strips[0].color.r, 0.3f);
+  // Against kGood's literals: points row-major (rows x columns), each [x, y, z], in and out.
+  for (const Hairstyle* h : {&a, &b}) {
+    const std::vector<Vec3>& p = h->strips[0].points;
+    EXPECT_EQ(p[1], Vec3(0.0, 0.01, 0.0994987437));
+    EXPECT_EQ(p[2], Vec3(0.0, -0.01, 0.15));
+    EXPECT_EQ(p[6], Vec3(0.0, -0.01, 0.25));
+    EXPECT_EQ(h->strips[0].point(2, 1), Vec3(0.0, 0.01, 0.2));  // row 2, column 1: points[5]
+    EXPECT_EQ(h->scalp.center(), Vec3::Zero());
+    EXPECT_EQ(h->scalp.radii(), Vec3(0.1, 0.1, 0.1));
+  }
+  // A scalp with a different number on every axis (the roots stay within the tolerance of it): centre,
+  // radii and rpy (REP-103: R = Rz(yaw) Ry(pitch) Rx(roll)) as written, before and after a save.
+  std::string text = kGood;
+  const std::string scalp = "center: [0, 0, 0], rpy: [0, 0, 0], radii: [0.1, 0.1, 0.1]";
+  text.replace(text.find(scalp), scalp.size(),
+               "center: [0.0005, -0.0004, 0.0003], rpy: [0.1, -0.05, 0.2], radii: [0.12, 0.1, 0.101]");
+  const Hairstyle c = loadHairstyle(test::writeTemp("scalp.yaml", text));
+  const std::string saved = test::tempPath("scalp_saved.yaml");
+  saveHairstyle(c, saved);
+  const Hairstyle d = loadHairstyle(saved);
+  const Mat3 rotation = (Eigen::AngleAxisd(0.2, Vec3::UnitZ()) * Eigen::AngleAxisd(-0.05, Vec3::UnitY()) *
+                         Eigen::AngleAxisd(0.1, Vec3::UnitX()))
+                            .toRotationMatrix();
+  for (const Hairstyle* h : {&c, &d}) {
+    EXPECT_EQ(h->scalp.center(), Vec3(0.0005, -0.0004, 0.0003));
+    EXPECT_EQ(h->scalp.radii(), Vec3(0.12, 0.1, 0.101));
+    EXPECT_TRUE(h->scalp.rotation().isApprox(rotation, 1e-12)) << h->scalp.rotation();
+  }
 }
 
 TEST(HairstyleTest, EveryMalformedKeyIsNamedWithItsValue) {
