@@ -4,6 +4,7 @@
 
 #include "TestUtil.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -279,13 +280,26 @@ TEST(TessellatorTest, ClippedColumnsHaveExactlyTheHairLength) {
       }
       const double hair_length = 0.8 * shortest;
       Tessellator tessellator(LevelOfDetail{2, 4}, method);
-      StripMesh mesh;
+      StripMesh mesh, unclipped;
       tessellator.tessellate(grid, columns, rows, hair_length, mesh);
+      tessellator.tessellate(grid, columns, rows, 1e3, unclipped);
+      ASSERT_EQ(unclipped.n_u, mesh.n_u);
       for (int iu = 0; iu < mesh.n_u; ++iu) {
         EXPECT_NEAR(columnLength(mesh, iu), hair_length, 1e-9) << iu;
         const std::size_t tip = static_cast<std::size_t>(mesh.index(iu, mesh.n_v - 1));
         EXPECT_EQ(mesh.v_param[tip], 1.0f);
-        // The clipped point lies on the polyline of the unclipped samples (here: close to the surface).
+        // Every vertex, the clipped tip among them, lies on the polyline of the unclipped samples.
+        for (int iv = 0; iv < mesh.n_v; ++iv) {
+          const Vec3& x = mesh.positions[static_cast<std::size_t>(mesh.index(iu, iv))];
+          double nearest = std::numeric_limits<double>::infinity();
+          for (int jv = 1; jv < unclipped.n_v; ++jv) {
+            const Vec3& a = unclipped.positions[static_cast<std::size_t>(unclipped.index(iu, jv - 1))];
+            const Vec3& b = unclipped.positions[static_cast<std::size_t>(unclipped.index(iu, jv))];
+            const double t = std::clamp((x - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+            nearest = std::min(nearest, (a + t * (b - a) - x).norm());
+          }
+          EXPECT_LT(nearest, 1e-12) << "column " << iu << ", vertex " << iv;
+        }
         float previous = -1.0f;
         for (int iv = 0; iv < mesh.n_v; ++iv) {
           const float v = mesh.v_param[static_cast<std::size_t>(mesh.index(iu, iv))];
