@@ -123,8 +123,24 @@ TEST(HairstyleTest, ConfigErrorsNameKeyAndValue) {
       {"world_frame: world", "world_frame: ''", "world_frame", "valid tf frame"},
       {"air_drag: 0.02", "air_drag: 0.02\n  air_dragg: 1", "physics.air_dragg", "unknown key"},
       {"gravity: [0.0, 0.0, -9.81]", "gravity: [0.0, -9.81]", "physics.gravity", "[0.0, -9.81]"},
+      {"head_frame: head", "head_frame: world", "head_frame", "'world'"},
+      // (This message names no value: the rule's bound only.)
+      {"gravity: [0.0, 0.0, -9.81]", "gravity: [600.0, 0.0, -800.5]", "physics.gravity", "above 1000"},
+      {"{name: head,", "{name: '',", "bodies[0].name", "must not be empty"},
+      // One publication per substep at most: 1 / 0.004166666666666667 s = 240 Hz.
+      {"publish_rate: 30.0", "publish_rate: 250", "publish_rate", "250 Hz"},
   };
   test::expectEditsNamed(good, cases, [](const std::string& path) { loadSimConfig(path); });
+  // Just inside those limits.
+  for (const auto& edit : std::vector<std::pair<std::string, std::string>>{
+           {"gravity: [0.0, 0.0, -9.81]", "gravity: [600.0, 0.0, -800.0]"},  // exactly 1000 m/s^2
+           {"publish_rate: 30.0", "publish_rate: 240"}}) {
+    std::string text = good;
+    const std::size_t at = text.find(edit.first);
+    ASSERT_NE(at, std::string::npos) << edit.first;
+    text.replace(at, edit.first.size(), edit.second);
+    EXPECT_NO_THROW(loadSimConfig(test::writeTemp("inside.yaml", text))) << edit.second;
+  }
 }
 
 }  // namespace
