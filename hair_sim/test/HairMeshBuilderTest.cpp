@@ -187,6 +187,7 @@ TEST(HairMeshBuilderTest, BuildRejectsBadStripOffsetsAndBuildsAfterwards) {
   // Each strip of 2 x 5 control points: (1 x 3 + 1) x (4 x 5 + 1) vertices.
   ASSERT_EQ(builder.vertexCount(), 100 * 4 * 21);
   ASSERT_GT(builder.projectedVertices(), 0);  // the surface dips into the body: projections to compare
+  const int projected = builder.projectedVertices();
   auto rejects = [&](const std::vector<Vec3>& p, const std::vector<int>& o, const std::string& text) {
     test::expectInvalid([&] { builder.build(p, o, style.scalp, bodies); }, text);
   };
@@ -199,15 +200,17 @@ TEST(HairMeshBuilderTest, BuildRejectsBadStripOffsetsAndBuildsAfterwards) {
   rejects(points, {}, "0 strip offsets for 100 strips");
   // Offsets past the points (cut short, or an offset too far or negative): the strip.
   const std::vector<Vec3> short_points(points.begin(), points.end() - 1);
-  rejects(short_points, offsets, "too few points for strip 99");
+  rejects(short_points, offsets,
+          "too few points for strip 99: its 10 points from offset 990 need 1000, 999 given");
   bad = offsets;
   bad[40] = 995;  // strip 40's 10 points would end at 1005
-  rejects(points, bad, "too few points for strip 40");
+  rejects(points, bad, "too few points for strip 40: its 10 points from offset 995 need 1005, 1000 given");
   bad[40] = offsets[40];
   bad[7] = -1;
-  rejects(points, bad, "too few points for strip 7");
+  rejects(points, bad, "strip 7: offset -1 is negative");
   // The failed builds left the meshes alone, and a good build gives what a fresh builder gives.
   EXPECT_EQ(builder.vertexCount(), 100 * 4 * 21);
+  EXPECT_EQ(builder.projectedVertices(), projected);  // the count that goes with them
   builder.build(points, offsets, style.scalp, bodies);
   EXPECT_EQ(builder.vertexCount(), 100 * 4 * 21);
   HairMeshBuilder fresh(style, options);

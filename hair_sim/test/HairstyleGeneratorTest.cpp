@@ -6,6 +6,7 @@
 #include <set>
 
 #include "TestUtil.hpp"
+#include "hair_sim/core/util/YamlReader.hpp"
 
 namespace hair_sim {
 namespace {
@@ -101,14 +102,16 @@ TEST(HairstyleGeneratorTest, RejectsBadOptions) {
   o = GeneratorOptions();
   o.columns = 1;
   test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "columns 1 < 2");
-  // The lengths' message names neither the option nor its value, only the rule.
+  // Each length named with its value.
   for (double bad : {0.0, -0.12, std::nan("")}) {
     o = GeneratorOptions();
     o.length_front = bad;
-    test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "hair lengths must be > 0");
+    test::expectInvalid([&] { generateHairstyle(kScalp, o); },
+                        "length_front " + formatDouble(bad) + " m must be > 0");
     o = GeneratorOptions();
     o.length_back = bad;
-    test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "hair lengths must be > 0");
+    test::expectInvalid([&] { generateHairstyle(kScalp, o); },
+                        "length_back " + formatDouble(bad) + " m must be > 0");
   }
   // Just inside the limits: one ring, hair a millimetre long.
   o = GeneratorOptions();

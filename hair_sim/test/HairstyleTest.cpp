@@ -124,8 +124,8 @@ TEST(HairstyleTest, ConfigErrorsNameKeyAndValue) {
       {"air_drag: 0.02", "air_drag: 0.02\n  air_dragg: 1", "physics.air_dragg", "unknown key"},
       {"gravity: [0.0, 0.0, -9.81]", "gravity: [0.0, -9.81]", "physics.gravity", "[0.0, -9.81]"},
       {"head_frame: head", "head_frame: world", "head_frame", "'world'"},
-      // (This message names no value: the rule's bound only.)
-      {"gravity: [0.0, 0.0, -9.81]", "gravity: [600.0, 0.0, -800.5]", "physics.gravity", "above 1000"},
+      {"gravity: [0.0, 0.0, -9.81]", "gravity: [600.0, 0.0, -800.5]", "physics.gravity",
+       "[600, 0, -800.5]: magnitude 1000.4000449820062 m/s^2 is above 1000"},
       {"{name: head,", "{name: '',", "bodies[0].name", "must not be empty"},
       // One publication per substep at most: 1 / 0.004166666666666667 s = 240 Hz.
       {"publish_rate: 30.0", "publish_rate: 250", "publish_rate", "250 Hz"},

@@ -117,18 +117,23 @@ int HairMeshBuilder::threads() const { return workers_ ? workers_->helpers() + 1
 
 void HairMeshBuilder::build(const std::vector<Vec3>& points, const std::vector<int>& strip_offsets,
                             const Ellipsoid& scalp, const std::vector<Ellipsoid>& bodies) {
-  projected_ = 0;
   const std::size_t strips = hairstyle_.strips.size();
   if (strip_offsets.size() != strips)
     throw std::invalid_argument("HairMeshBuilder::build(...) : " + std::to_string(strip_offsets.size()) +
                                 " strip offsets for " + std::to_string(strips) + " strips");
   for (std::size_t s = 0; s < strips; ++s) {
     const std::size_t first = static_cast<std::size_t>(strip_offsets[s]);
-    if (strip_offsets[s] < 0 ||
-        first + static_cast<std::size_t>(hairstyle_.strips[s].pointCount()) > points.size())
-      throw std::invalid_argument("HairMeshBuilder::build(...) : too few points for strip " +
-                                  std::to_string(s));
+    const int count = hairstyle_.strips[s].pointCount();
+    if (strip_offsets[s] < 0)
+      throw std::invalid_argument("HairMeshBuilder::build(...) : strip " + std::to_string(s) + ": offset " +
+                                  std::to_string(strip_offsets[s]) + " is negative");
+    if (first + static_cast<std::size_t>(count) > points.size())
+      throw std::invalid_argument(
+          "HairMeshBuilder::build(...) : too few points for strip " + std::to_string(s) + ": its " +
+          std::to_string(count) + " points from offset " + std::to_string(first) + " need " +
+          std::to_string(first + count) + ", " + std::to_string(points.size()) + " given");
   }
+  projected_ = 0;  // (after the checks: a refused build leaves the last one's count with its meshes)
   // A vertex farther from a body's centre than its largest radius (with 1e-9 to spare) is outside it: the
   // exact test (a transform into the body's sphere space) only for the others.
   body_reach2_.clear();

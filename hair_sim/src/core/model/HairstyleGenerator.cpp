@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "hair_sim/core/geometry/Tessellator.hpp"
+#include "hair_sim/core/util/YamlReader.hpp"
 
 namespace hair_sim {
 
@@ -76,8 +77,12 @@ Hairstyle generateHairstyle(const Ellipsoid& scalp, const GeneratorOptions& o,
     throw std::invalid_argument("generateHairstyle(...) : columns " + std::to_string(o.columns) + " < 2");
   if (o.rows < Strip::kMinRows)
     throw std::invalid_argument("generateHairstyle(...) : rows " + std::to_string(o.rows) + " < 4");
-  if (!(o.length_front > 0.0 && o.length_back > 0.0))
-    throw std::invalid_argument("generateHairstyle(...) : hair lengths must be > 0");
+  if (!(o.length_front > 0.0))
+    throw std::invalid_argument("generateHairstyle(...) : length_front " + formatDouble(o.length_front) +
+                                " m must be > 0");
+  if (!(o.length_back > 0.0))
+    throw std::invalid_argument("generateHairstyle(...) : length_back " + formatDouble(o.length_back) +
+                                " m must be > 0");
 
   std::mt19937 rng(o.seed);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);

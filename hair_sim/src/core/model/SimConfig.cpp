@@ -52,7 +52,10 @@ SimConfig loadSimConfig(const std::string& path) {
     q.max_angle_step = p.getDouble("max_angle_step", 1e-3, 1.5, q.max_angle_step);
     q.max_bend = p.getDouble("max_bend", 0.1, 3.0, q.max_bend);
     q.compensate_rest_angles = p.getBool("compensate_rest_angles", q.compensate_rest_angles);
-    if (q.gravity.norm() > 1000.0) throw p.error("gravity", "magnitude above 1000 m/s^2");
+    if (q.gravity.norm() > 1000.0)
+      throw p.error("gravity", "[" + formatDouble(q.gravity.x()) + ", " + formatDouble(q.gravity.y()) + ", " +
+                                   formatDouble(q.gravity.z()) + "]: magnitude " +
+                                   formatDouble(q.gravity.norm()) + " m/s^2 is above 1000");
   }
   if (y.has("collision")) {
     const YamlReader p = y.child("collision");
