@@ -828,6 +828,49 @@ TEST(SimulatorTest, RejectsBadParametersAndShapes) {
             std::string::npos);
 }
 
+TEST(SimulatorTest, StepRefusesNonFiniteInputsAndKeepsTheState) {
+  // Each input of a substep made non-finite in turn: step() names it and takes no substep (the state's bits
+  // and the step count stay); the next good substep gives the bits of a run that never saw the bad ones.
+  const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
+  const Hairstyle style = loadHairstyle(config.hairstyle_file);
+  const Iso3 rest = headRest();
+  Simulator sim(style, config.physics, config.bodies), twin(style, config.physics, config.bodies);
+  HeadMotionEstimator head, head_twin;
+  head.reset(rest);
+  head_twin.reset(rest);
+  for (int i = 0; i < 20; ++i) {
+    sim.step(shakeInputs(config, rest, i, 1.0, head, sim.parameters().substep));
+    twin.step(shakeInputs(config, rest, i, 1.0, head_twin, twin.parameters().substep));
+  }
+  const StepInputs good = shakeInputs(config, rest, 20, 1.0, head, sim.parameters().substep);
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const Vec3 up_inf(0.0, 0.0, -inf);
+  const std::vector<std::pair<std::string, std::function<void(StepInputs&)>>> cases = {
+      {"head.pose", [&](StepInputs& in) { in.head.pose.translation().x() = nan; }},
+      {"head.linear_velocity is (0, inf, 0)",
+       [&](StepInputs& in) { in.head.linear_velocity = Vec3(0, inf, 0); }},
+      {"head.linear_acceleration", [&](StepInputs& in) { in.head.linear_acceleration.z() = nan; }},
+      {"head.angular_velocity", [&](StepInputs& in) { in.head.angular_velocity.x() = -inf; }},
+      {"head.angular_acceleration", [&](StepInputs& in) { in.head.angular_acceleration.y() = nan; }},
+      {"wind is (nan, 1, 0)", [&](StepInputs& in) { in.wind.x() = nan; }},
+      {"gravity is (0, 0, -inf)", [&](StepInputs& in) { in.gravity = &up_inf; }},
+      {"body_frames[2]", [&](StepInputs& in) { in.body_frames[2].linear()(1, 1) = nan; }},
+  };
+  const std::vector<Vec3> before = sim.positionsHead();
+  for (const auto& c : cases) {
+    StepInputs bad = good;
+    c.second(bad);
+    EXPECT_NE(test::errorOf([&] { sim.step(bad); }).find(c.first), std::string::npos) << c.first;
+    EXPECT_EQ(sim.stepCount(), 20);
+    EXPECT_EQ(0, std::memcmp(before.data(), sim.positionsHead().data(), before.size() * sizeof(Vec3)))
+        << c.first;
+  }
+  sim.step(good);
+  twin.step(shakeInputs(config, rest, 20, 1.0, head_twin, twin.parameters().substep));
+  EXPECT_EQ(
+      0, std::memcmp(twin.positionsHead().data(), sim.positionsHead().data(), before.size() * sizeof(Vec3)));
+}
+
 TEST(SimulatorTest, EveryBadParameterIsNamedWithItsValue) {
   // PhysicsParameters::validate (the constructor, and setParameters, which keeps the old set): a value just
   // outside each rule, or a NaN or infinity, named with the key and the value ("PhysicsParameters: key:

@@ -1683,7 +1683,35 @@ void Simulator::setShape(const std::vector<Vec3>& target) {
   }
 }
 
+namespace {
+/// Throws std::invalid_argument naming the first non-finite input of a substep (before it changes anything).
+void checkStepInputs(const StepInputs& in) {
+  auto vec = [](const char* what, const Vec3& v) {
+    if (v.allFinite()) return;
+    char text[160];
+    std::snprintf(text, sizeof(text), "%s is (%g, %g, %g)", what, v.x(), v.y(), v.z());
+    throw std::invalid_argument(std::string("Simulator::step(...) : ") + text +
+                                ": not finite, the substep is not taken");
+  };
+  auto pose = [](const std::string& what, const Iso3& p) {
+    if (!p.matrix().allFinite())
+      throw std::invalid_argument("Simulator::step(...) : " + what +
+                                  " has non-finite entries: the substep is not taken");
+  };
+  pose("head.pose", in.head.pose);
+  vec("head.linear_velocity", in.head.linear_velocity);
+  vec("head.linear_acceleration", in.head.linear_acceleration);
+  vec("head.angular_velocity", in.head.angular_velocity);
+  vec("head.angular_acceleration", in.head.angular_acceleration);
+  vec("wind", in.wind);
+  if (in.gravity) vec("gravity", *in.gravity);
+  for (std::size_t b = 0; b < in.body_frames.size(); ++b)
+    pose("body_frames[" + std::to_string(b) + "]", in.body_frames[b]);
+}
+}  // namespace
+
 void Simulator::step(const StepInputs& in) {
+  checkStepInputs(in);
   StepFrame f;
   f.dt = params_.substep;
   f.rho = params_.linear_density;

@@ -125,7 +125,9 @@ class Simulator {
   /// are kept: each segment takes the direction toward its given end point. Roots stay on the scalp.
   /// Throws std::invalid_argument on a wrong size or a non-finite point.
   void setShape(const std::vector<Vec3>& positions_head);
-  /// One substep of parameters().substep seconds with the given inputs at its end time.
+  /// One substep of parameters().substep seconds with the given inputs at its end time. Throws
+  /// std::invalid_argument, naming the input and taking no substep, when the head state, the wind, the
+  /// gravity or a body frame is not finite, or when body_frames does not match the bodies.
   void step(const StepInputs& inputs);
   /// Swaps the physical parameters between two substeps, keeping the state (shape and rates): the
   /// next step() runs with them. Inertia floors and compensated rest directions are recomputed, and
