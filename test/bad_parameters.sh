@@ -54,8 +54,14 @@ expect_refused "tcp_nodelay of the wrong type" "parameter ~tcp_nodelay: 'maybe' 
   _config_file:="$CONFIG" _tcp_nodelay:=maybe
 expect_refused "teleport_distance 0" "parameter ~teleport_distance: '0' must be > 0 m" \
   _config_file:="$CONFIG" _teleport_distance:=0.0
-expect_refused "max_tf_age negative" "parameter ~max_tf_age: '-1' must be > 0 s" \
+expect_refused "max_tf_age negative" "parameter ~max_tf_age: '-1' must be in (0, 5] s" \
   _config_file:="$CONFIG" _max_tf_age:=-1.0
+expect_refused "max_tf_age beyond the tf cache" "parameter ~max_tf_age: '12' must be in (0, 5] s" \
+  _config_file:="$CONFIG" _max_tf_age:=12.0
+expect_refused "max_substeps_per_update huge" "parameter ~max_substeps_per_update: '1000000' must be in 1..24000" \
+  _config_file:="$CONFIG" _max_substeps_per_update:=1000000
+expect_refused "strands_per_strip huge" "parameter ~strands_per_strip: '1000000' must be in 1..10000" \
+  _config_file:="$CONFIG" _strands_per_strip:=1000000
 expect_refused "missing config file" "$TMP/none.yaml" _config_file:="$TMP/none.yaml"
 sed 's/^  hinge_stiffness: .*/  hinge_stiffness: -3.0/' "$CONFIG" >"$TMP/negative.yaml"
 grep -q "hinge_stiffness: -3.0" "$TMP/negative.yaml" || { echo "FAIL: could not write negative.yaml"; exit 1; }

@@ -13,6 +13,10 @@ same node, sends:
   test_f_stale_head        no head tf for STALE_PERIOD s (~max_tf_age is 0.5 s)
   test_g_teleport          the head jumps 1.0 m sideways and turns 2 rad between two tf messages
   test_h_stall             the node's process stopped (SIGSTOP) for STALL s while tf goes on, then continued
+  test_i_far_future        a head tf and a Wind stamped 2^32 - 1 s (68 years past the clock's range of
+                           ros::Duration): the tf refused as ahead of the clock, the Wind taken on arrival
+  test_j_turbulence        a Wind with turbulence 1e306 (the wind would be infinite)
+  test_k_gap               no head tf for GAP s, longer than the 10 s tf cache: the hair steps on afterwards
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
 given with each case), hair_state keeps coming at publish_rate (at least 80 % of it, stale period included),
@@ -72,6 +76,8 @@ TELEPORT = 1.0  # m, sideways (+y); the node's ~teleport_distance is 0.5 m
 TELEPORT_TIP_MOVE = 0.05  # m
 STALL = 3.0  # s: the node's process stopped
 STALL_RATE_MAX = 1.2  # x publish_rate after the stall (the tf backlog stepped one message at a time: 2.4 x)
+GAP = 12.0  # s without head tf: beyond the tf cache (10 s)
+STEP_FRACTION = 0.5  # of 240 substeps per second: the hair steps on (not frozen at the old pose)
 
 
 def quat_yaw(yaw):
@@ -152,6 +158,11 @@ class RobustnessChecks(unittest.TestCase):
         with cls.lock:
             if cls.last_stamp is None or t.header.stamp > cls.last_stamp:
                 cls.last_stamp = t.header.stamp
+        cls.tf_pub.publish(TFMessage(transforms=[t]))
+
+    @classmethod
+    def send_raw(cls, t):
+        """A transform not counted as the newest sent (one the node must refuse)."""
         cls.tf_pub.publish(TFMessage(transforms=[t]))
 
     # -- helpers (test thread)
@@ -356,6 +367,51 @@ class RobustnessChecks(unittest.TestCase):
                              '%d hair_state in the %.1f s from 0.5 s after the stall: a burst' % (len(window), WATCH))
         rospy.loginfo('%s: after a %.1f s stall, %d hair_state in the %.1f s from 0.5 s after it', NAME, STALL,
                       len(window), WATCH)
+
+    def steps_on(self, window):
+        """The simulation advanced through the window: at least STEP_FRACTION of 240 substeps per second."""
+        span = window[-1].header.stamp.to_sec() - window[0].header.stamp.to_sec()
+        steps = window[-1].step - window[0].step
+        self.assertGreater(span, 0.5 * WATCH, 'hair_state stamps advanced %.3f s in %.1f s' % (span, WATCH))
+        self.assertGreaterEqual(steps, STEP_FRACTION * 240.0 * span,
+                                '%d substeps over %.3f s of hair_state stamps: the simulation stopped' % (steps, span))
+
+    def test_i_far_future(self):
+        head = tuple(self.head)
+        since = self.log_index()
+        self.send_raw(self.transform(rospy.Time(4294967295, 0), head, quat_yaw(TELEPORT_YAW)))
+        self.expect_log(since, 'ahead of the clock')
+        self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
+        w = Wind()
+        w.header.stamp = rospy.Time(4294967295, 0)
+        w.header.frame_id = self.world_frame
+        w.velocity.x = 0.5
+        self.wind_pub.publish(w)
+        time.sleep(0.2)
+        self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
+
+    def test_j_turbulence(self):
+        head = tuple(self.head)
+        since = self.log_index()
+        w = Wind()
+        w.header.frame_id = self.world_frame
+        w.velocity.x = 1.0
+        w.turbulence = 1e306
+        self.wind_pub.publish(w)
+        self.expect_log(since, 'turbulence is 1e+306, must be <= 10')
+        self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
+
+    def test_k_gap(self):
+        head = tuple(self.head)
+        with self.lock:
+            type(self).broadcasting = False
+        time.sleep(GAP)
+        since = self.log_index()
+        with self.lock:
+            type(self).broadcasting = True
+        self.expect_log(since, 'skipping ahead to it, the hair carried rigidly')
+        time.sleep(0.5)
+        self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
 
     def node_pid(self):
         uri = rosgraph.Master('/' + NAME).lookupNode(self.node)

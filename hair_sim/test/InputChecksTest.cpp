@@ -30,6 +30,10 @@ TEST(InputChecksTest, WindNamesTheBadField) {
   EXPECT_EQ(checkWind(w), "turbulence is nan");
   w.turbulence = -0.5;
   EXPECT_EQ(checkWind(w), "turbulence is -0.5, must be >= 0");
+  w.turbulence = 10.0;  // (the fluctuation ten times the mean speed: taken)
+  EXPECT_EQ(checkWind(w), "");
+  w.turbulence = 1e306;  // (would make the wind infinite)
+  EXPECT_EQ(checkWind(w), "turbulence is 1e+306, must be <= 10");
   w.turbulence = 0.2;
   w.ramp_time = -1.0;
   EXPECT_EQ(checkWind(w), "ramp_time is -1 s, must be >= 0");

@@ -24,6 +24,17 @@ std::invalid_argument badParam(const std::string& name, const std::string& value
   return std::invalid_argument("parameter ~" + name + ": '" + value + "' " + rule);
 }
 
+/// Runs a callback's body: an exception (an input no check caught, or a bug) is logged with the callback
+/// named, and the node goes on (roscpp does not catch what a callback throws: the node would end).
+template <typename F>
+void guarded(const char* callback, F body) {
+  try {
+    body();
+  } catch (const std::exception& e) {
+    ROS_ERROR_THROTTLE(5.0, "hair_sim: %s failed: %s; the node goes on", callback, e.what());
+  }
+}
+
 const char* typeName(const std::string*) { return "a string"; }
 const char* typeName(const int*) { return "an integer"; }
 const char* typeName(const double*) { return "a number"; }
@@ -143,8 +154,9 @@ void HairSimNode::readParameters() {
   mesh_options_.level_of_detail = LevelOfDetail{across, along};
   mesh_options_.max_triangles = max_triangles;
   readParam(pnh_, "max_substeps_per_update", max_substeps_per_update_);
-  if (max_substeps_per_update_ < 1)
-    throw badParam("max_substeps_per_update", std::to_string(max_substeps_per_update_), "must be >= 1");
+  if (max_substeps_per_update_ < 1 || max_substeps_per_update_ > 24000)
+    throw badParam("max_substeps_per_update", std::to_string(max_substeps_per_update_),
+                   "must be in 1..24000 (100 s of substeps at 240 Hz)");
   double smoothing = 0.02;
   readParam(pnh_, "head_smoothing", smoothing);
   if (!(std::isfinite(smoothing) && smoothing >= 0.0 && smoothing <= 1.0))
@@ -161,13 +173,13 @@ void HairSimNode::readParameters() {
   teleport_distance_ = teleport_distance;
   teleport_angle_ = teleport_angle;
   readParam(pnh_, "max_tf_age", max_tf_age_);
-  if (!(std::isfinite(max_tf_age_) && max_tf_age_ > 0.0))
-    throw badParam("max_tf_age", formatDouble(max_tf_age_), "must be > 0 s");
+  if (!(std::isfinite(max_tf_age_) && max_tf_age_ > 0.0 && max_tf_age_ <= 5.0))
+    throw badParam("max_tf_age", formatDouble(max_tf_age_), "must be in (0, 5] s (the tf cache holds 10 s)");
   readParam(pnh_, "threads", threads_);
   if (threads_ < 1 || threads_ > 64) throw badParam("threads", std::to_string(threads_), "must be in 1..64");
   readParam(pnh_, "strands_per_strip", strands_per_strip_);
-  if (strands_per_strip_ < 1)
-    throw badParam("strands_per_strip", std::to_string(strands_per_strip_), "must be >= 1");
+  if (strands_per_strip_ < 1 || strands_per_strip_ > 10000)
+    throw badParam("strands_per_strip", std::to_string(strands_per_strip_), "must be in 1..10000");
   readParam(pnh_, "tcp_nodelay", tcp_nodelay_);
   readParam(pnh_, "wind_scale", wind_scale_);
   if (!(std::isfinite(wind_scale_) && wind_scale_ >= 0.0 && wind_scale_ <= 100.0))
@@ -227,36 +239,40 @@ Vec3 HairSimNode::windAt(double t) const {
 }
 
 void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
-  const std::string problem = checkWind(*msg);
-  if (!problem.empty()) {
-    warnThrottled("wind", "hair_sim: ignored a Wind message: " + problem + "; the last good wind holds");
-    diagnostics_->droppedInput("wind: " + problem);
-    return;
-  }
-  const Vec3 v(msg->velocity.x, msg->velocity.y, msg->velocity.z);
-  Vec3 world = v;
-  const std::string frame = msg->header.frame_id;
-  if (!frame.empty() && frame != config_.world_frame) {
-    Iso3 pose;
-    if (!lookupPose(frame, ros::Time(0), pose)) {
-      warnThrottled("wind", "hair_sim: ignored a Wind message: header.frame_id '" + frame +
-                                "' is unknown (no tf to '" + config_.world_frame +
-                                "'); the last good wind holds");
-      diagnostics_->droppedInput("wind: no tf from '" + frame + "'");
+  guarded("the Wind callback", [&] {
+    const std::string problem = checkWind(*msg);
+    if (!problem.empty()) {
+      warnThrottled("wind", "hair_sim: ignored a Wind message: " + problem + "; the last good wind holds");
+      diagnostics_->droppedInput("wind: " + problem);
       return;
     }
-    world = pose.linear() * v;
-  }
-  // The ramp starts at header.stamp (so that a replay starts it at the same instant of the hair's time),
-  // or on arrival when the stamp is zero or further than max_tf_age from the clock.
-  double start = started_ ? sim_time_.toSec() : 0.0;
-  if (!msg->header.stamp.isZero() && std::abs((msg->header.stamp - ros::Time::now()).toSec()) <= max_tf_age_)
-    start = msg->header.stamp.toSec();
-  wind_from_ = windAt(start);
-  wind_to_ = world;
-  wind_start_ = start;
-  wind_ramp_ = msg->ramp_time;
-  turbulence_ = msg->turbulence;
+    const Vec3 v(msg->velocity.x, msg->velocity.y, msg->velocity.z);
+    Vec3 world = v;
+    const std::string frame = msg->header.frame_id;
+    if (!frame.empty() && frame != config_.world_frame) {
+      Iso3 pose;
+      if (!lookupPose(frame, ros::Time(0), pose)) {
+        warnThrottled("wind", "hair_sim: ignored a Wind message: header.frame_id '" + frame +
+                                  "' is unknown (no tf to '" + config_.world_frame +
+                                  "'); the last good wind holds");
+        diagnostics_->droppedInput("wind: no tf from '" + frame + "'");
+        return;
+      }
+      world = pose.linear() * v;
+    }
+    // The ramp starts at header.stamp (so that a replay starts it at the same instant of the hair's time),
+    // or on arrival when the stamp is zero or further than max_tf_age from the clock.
+    // (Differences of stamps in double: ros::Duration throws beyond 68 years.)
+    const double now = ros::Time::now().toSec();
+    double start = started_ ? sim_time_.toSec() : now;
+    if (!msg->header.stamp.isZero() && std::abs(msg->header.stamp.toSec() - now) <= max_tf_age_)
+      start = msg->header.stamp.toSec();
+    wind_from_ = windAt(start);
+    wind_to_ = world;
+    wind_start_ = start;
+    wind_ramp_ = msg->ramp_time;
+    turbulence_ = msg->turbulence;
+  });
 }
 
 bool HairSimNode::schedule(const hair_sim_msgs::HairEvent& msg, std::string* message) {
@@ -290,14 +306,16 @@ bool HairSimNode::schedule(const hair_sim_msgs::HairEvent& msg, std::string* mes
 }
 
 void HairSimNode::onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg) {
-  std::string message;
-  if (schedule(*msg, &message)) {
-    ROS_INFO("hair_sim: event: %s", message.c_str());
-    return;
-  }
-  EventType type;
-  if (parseEventType(msg->type, &type) && isHeadMotion(type)) return;  // the head driver's
-  warnThrottled("event", "hair_sim: ignored a HairEvent (" + msg->type + "): " + message);
+  guarded("the HairEvent callback", [&] {
+    std::string message;
+    if (schedule(*msg, &message)) {
+      ROS_INFO("hair_sim: event: %s", message.c_str());
+      return;
+    }
+    EventType type;
+    if (parseEventType(msg->type, &type) && isHeadMotion(type)) return;  // the head driver's
+    warnThrottled("event", "hair_sim: ignored a HairEvent (" + msg->type + "): " + message);
+  });
 }
 
 bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
@@ -357,61 +375,69 @@ bool HairSimNode::onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs:
 }
 
 void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event, bool is_static) {
-  tf_received_ = ros::WallTime::now();
-  if (!is_static) {
-    const ros::Time now = ros::Time::now();
-    if (now < last_tf_receipt_) {
-      ROS_WARN("hair_sim: time jumped back %.3f s: clearing the tf buffer", (last_tf_receipt_ - now).toSec());
-      tf_buffer_.clear();
-      newest_tf_stamp_.clear();
-      last_head_tf_ = geometry_msgs::TransformStamped();
+  guarded("the tf callback", [&] {
+    tf_received_ = ros::WallTime::now();
+    if (!is_static) {
+      const ros::Time now = ros::Time::now();
+      if (now < last_tf_receipt_) {
+        ROS_WARN("hair_sim: time jumped back %.3f s: clearing the tf buffer",
+                 (last_tf_receipt_ - now).toSec());
+        tf_buffer_.clear();
+        newest_tf_stamp_.clear();
+        last_head_tf_ = geometry_msgs::TransformStamped();
+      }
+      last_tf_receipt_ = now;
     }
-    last_tf_receipt_ = now;
-  }
-  const std::string& authority = event.getPublisherName();
-  ros::Time newest;  // newest stamp taken from this message
-  for (const geometry_msgs::TransformStamped& t : event.getMessage()->transforms) {
-    // A bad transform never enters the buffer (lookups would interpolate with it): the last good
-    // one holds. A non-unit quaternion is normalised (tf2 would refuse it).
-    geometry_msgs::TransformStamped fixed;
-    bool normalised = false;
-    const std::string problem = checkTransform(t, &fixed, &normalised);
-    if (!problem.empty()) {
-      warnThrottled("tf", "hair_sim: ignored tf " + t.header.frame_id + " -> " + t.child_frame_id + " from " +
-                              authority + ": transform." + problem + "; the last good pose holds");
-      diagnostics_->droppedInput("tf " + t.child_frame_id + ": transform." + problem);
-      continue;
+    const std::string& authority = event.getPublisherName();
+    ros::Time newest;  // newest stamp taken from this message
+    for (const geometry_msgs::TransformStamped& t : event.getMessage()->transforms) {
+      // A bad transform never enters the buffer (lookups would interpolate with it): the last good
+      // one holds. A non-unit quaternion is normalised (tf2 would refuse it).
+      geometry_msgs::TransformStamped fixed;
+      bool normalised = false;
+      const std::string problem = checkTransform(t, &fixed, &normalised);
+      if (!problem.empty()) {
+        warnThrottled("tf", "hair_sim: ignored tf " + t.header.frame_id + " -> " + t.child_frame_id +
+                                " from " + authority + ": transform." + problem +
+                                "; the last good pose holds");
+        diagnostics_->droppedInput("tf " + t.child_frame_id + ": transform." + problem);
+        continue;
+      }
+      if (normalised)
+        ROS_WARN_THROTTLE(5.0, "hair_sim: tf %s -> %s from %s: rotation quaternion of norm %.6g normalised",
+                          t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(),
+                          std::sqrt(t.transform.rotation.x * t.transform.rotation.x +
+                                    t.transform.rotation.y * t.transform.rotation.y +
+                                    t.transform.rotation.z * t.transform.rotation.z +
+                                    t.transform.rotation.w * t.transform.rotation.w));
+      if (!is_static && !acceptTfStamp(fixed, authority)) continue;
+      if (!is_static && fixed.child_frame_id == config_.head_frame) holdBeforeJump(fixed, authority);
+      if (fixed.header.stamp > newest) newest = fixed.header.stamp;
+      try {
+        tf_buffer_.setTransform(fixed, authority, is_static);
+        if (!is_static) {
+          ros::Time& newest_of_child = newest_tf_stamp_[fixed.child_frame_id];
+          if (fixed.header.stamp > newest_of_child) newest_of_child = fixed.header.stamp;
+        }
+      } catch (const tf2::TransformException& e) {
+        ROS_WARN_THROTTLE(5.0, "hair_sim: tf %s -> %s from %s rejected: %s", t.header.frame_id.c_str(),
+                          t.child_frame_id.c_str(), authority.c_str(), e.what());
+      }
     }
-    if (normalised)
-      ROS_WARN_THROTTLE(5.0, "hair_sim: tf %s -> %s from %s: rotation quaternion of norm %.6g normalised",
-                        t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(),
-                        std::sqrt(t.transform.rotation.x * t.transform.rotation.x +
-                                  t.transform.rotation.y * t.transform.rotation.y +
-                                  t.transform.rotation.z * t.transform.rotation.z +
-                                  t.transform.rotation.w * t.transform.rotation.w));
-    if (!is_static && !acceptTfStamp(fixed, authority)) continue;
-    if (!is_static && fixed.child_frame_id == config_.head_frame) holdBeforeJump(fixed, authority);
-    if (fixed.header.stamp > newest) newest = fixed.header.stamp;
-    try {
-      tf_buffer_.setTransform(fixed, authority, is_static);
-    } catch (const tf2::TransformException& e) {
-      ROS_WARN_THROTTLE(5.0, "hair_sim: tf %s -> %s from %s rejected: %s", t.header.frame_id.c_str(),
-                        t.child_frame_id.c_str(), authority.c_str(), e.what());
+    if (is_static || newest.isZero()) return;
+    // Poses older than max_tf_age on arrival (the queue's backlog after the process stalled, or a late
+    // source) are buffered without stepping and publishing for each: the next fresh one steps through them
+    // all (within max_substeps_per_update), and the timer keeps the outputs going meanwhile.
+    const double late = ros::Time::now().toSec() - newest.toSec();
+    if (late > max_tf_age_) {
+      ROS_WARN_THROTTLE(5.0,
+                        "hair_sim: tf from %s is %.3f s old on arrival (max_tf_age %.2f s): buffered without "
+                        "stepping (a backlog after a stall, or a late source)",
+                        authority.c_str(), late, max_tf_age_);
+      return;
     }
-  }
-  if (is_static || newest.isZero()) return;
-  // Poses older than max_tf_age on arrival (the queue's backlog after the process stalled, or a late
-  // source) are buffered without stepping and publishing for each: the next fresh one steps through them
-  // all (within max_substeps_per_update), and the timer keeps the outputs going meanwhile.
-  const double late = (ros::Time::now() - newest).toSec();
-  if (late > max_tf_age_) {
-    ROS_WARN_THROTTLE(5.0,
-                      "hair_sim: tf from %s is %.3f s old on arrival (max_tf_age %.2f s): buffered without "
-                      "stepping (a backlog after a stall, or a late source)",
-                      authority.c_str(), late, max_tf_age_);
-    return;
-  }
-  update(true);
+    update(true);
+  });
 }
 
 void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority) {
@@ -436,19 +462,32 @@ void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const
 }
 
 bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const std::string& authority) {
-  ros::Time& newest = newest_tf_stamp_[t.child_frame_id];
+  const auto known = newest_tf_stamp_.find(t.child_frame_id);
+  const ros::Time newest = known == newest_tf_stamp_.end() ? ros::Time() : known->second;
   const ros::Time& stamp = t.header.stamp;
+  const double cache = tf_buffer_.getCacheLength().toSec();
   if (stamp.isZero()) {
     ROS_WARN_THROTTLE(5.0, "hair_sim: ignored tf %s -> %s from %s: header.stamp is 0 (not on /tf_static)",
                       t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str());
     diagnostics_->droppedInput("tf " + t.child_frame_id + ": header.stamp is 0");
     return false;
   }
-  if (stamp > newest) {
-    newest = stamp;
-    return true;
+  // Ahead of the clock by more than the cache (a wrong clock, a bad stamp): taken, it would hold the frame's
+  // later transforms back as out of date until the clock caught up. (Not while the clock is 0: use_sim_time
+  // before the first /clock.)
+  const ros::Time now = ros::Time::now();
+  const double ahead = stamp.toSec() - now.toSec();
+  if (!now.isZero() && ahead > cache) {
+    ROS_WARN_THROTTLE(5.0,
+                      "hair_sim: ignored tf %s -> %s from %s: header.stamp %.6f is %.3f s ahead of the clock "
+                      "(%.6f), beyond the %.1f s tf cache",
+                      t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(), stamp.toSec(),
+                      ahead, now.toSec(), cache);
+    diagnostics_->droppedInput("tf " + t.child_frame_id + ": header.stamp ahead of the clock");
+    return false;
   }
-  const double behind = (newest - stamp).toSec();
+  if (stamp > newest) return true;  // (its child's newest once tf2 takes it, in onTf)
+  const double behind = newest.toSec() - stamp.toSec();
   if (stamp == newest) {
     ROS_WARN_THROTTLE(5.0,
                       "hair_sim: ignored tf %s -> %s from %s: header.stamp %.6f repeats the previous one",
@@ -456,13 +495,13 @@ bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const 
     diagnostics_->droppedInput("tf " + t.child_frame_id + ": repeated header.stamp");
     return false;
   }
-  if (behind >= tf_buffer_.getCacheLength().toSec()) {
+  if (behind >= cache) {
     ROS_WARN_THROTTLE(
         5.0,
         "hair_sim: ignored tf %s -> %s from %s: header.stamp %.6f is %.3f s older than the newest "
         "(%.6f), beyond the %.1f s tf cache",
         t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(), stamp.toSec(), behind,
-        newest.toSec(), tf_buffer_.getCacheLength().toSec());
+        newest.toSec(), cache);
     diagnostics_->droppedInput("tf " + t.child_frame_id + ": header.stamp older than the tf cache");
     return false;
   }
@@ -513,9 +552,11 @@ void HairSimNode::warnThrottled(const std::string& what, const std::string& text
 }
 
 void HairSimNode::onTimer(const ros::TimerEvent&) {
-  // A fallback while no tf comes in (the hair still settles and is published at publish_rate).
-  if ((ros::WallTime::now() - last_tf_publish_).toSec() < 1.5 / config_.publish_rate) return;
-  update(false);
+  guarded("the timer", [&] {
+    // A fallback while no tf comes in (the hair still settles and is published at publish_rate).
+    if ((ros::WallTime::now() - last_tf_publish_).toSec() < 1.5 / config_.publish_rate) return;
+    update(false);
+  });
 }
 
 void HairSimNode::update(bool from_tf) {
@@ -541,6 +582,9 @@ void HairSimNode::update(bool from_tf) {
       ROS_WARN("hair_sim: %zu scheduled events dropped with the time jump", events_.size());
       events_.clear();
     }
+    // A wind ramp started at a time now in the future would hold the wind before it: the last wind blows.
+    wind_from_ = wind_to_;
+    wind_start_ = 0.0;
     snapSimTime(target);
     next_publish_ = ros::Time();
     started_ = true;
@@ -552,7 +596,7 @@ void HairSimNode::update(bool from_tf) {
   // goes on moving, up to max_tf_age behind the clock (so that a pose coming in again is not taken for
   // time going backwards).
   const ros::Time clock = ros::Time::now();
-  const double age = (clock - target).toSec();
+  const double age = clock.toSec() - target.toSec();
   const bool stale = age > max_tf_age_;
   if (stale != head_stale_) {
     if (stale)
@@ -609,7 +653,21 @@ void HairSimNode::update(bool from_tf) {
     }
     applyLiveSettings();
     Iso3 pose;
-    if (!lookupPose(config_.head_frame, t, pose)) break;
+    if (!lookupPose(config_.head_frame, t, pose)) {
+      // The newest pose is there (target), this earlier one is not: tf dropped it (a gap in the head's tf
+      // longer than its cache, a clock that jumped) or never had it. Waiting would never bring it: the hair
+      // goes to the newest pose rigidly, as in a teleport.
+      ROS_WARN(
+          "hair_sim: no head pose at t = %.3f, %.3f s before the newest (%.3f; the tf cache holds %.1f s): "
+          "skipping ahead to it, the hair carried rigidly",
+          t.toSec(), target.toSec() - t.toSec(), target.toSec(), tf_buffer_.getCacheLength().toSec());
+      diagnostics_->droppedInput("head poses: skipped " + formatDouble(target.toSec() - sim_time_.toSec()) +
+                                 " s (no longer in tf)");
+      snapSimTime(target);
+      head_.reset(latest_pose);
+      simulator_->forgetBodyMotion();
+      break;
+    }
     bool frames_ok = true;
     for (std::size_t b = 0; b < config_.bodies.size() && frames_ok; ++b)
       frames_ok = lookupPose(config_.bodies[b].frame, t, frames[b]);

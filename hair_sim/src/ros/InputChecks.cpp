@@ -31,6 +31,8 @@ std::string checkWind(const hair_sim_msgs::Wind& msg) {
     if (!problem.empty()) return problem;
   }
   if (msg.turbulence < 0.0) return "turbulence is " + show(msg.turbulence) + ", must be >= 0";
+  if (msg.turbulence > kMaxTurbulence)
+    return "turbulence is " + show(msg.turbulence) + ", must be <= " + show(kMaxTurbulence);
   if (msg.ramp_time < 0.0) return "ramp_time is " + show(msg.ramp_time) + " s, must be >= 0";
   const double speed = std::sqrt(msg.velocity.x * msg.velocity.x + msg.velocity.y * msg.velocity.y +
                                  msg.velocity.z * msg.velocity.z);

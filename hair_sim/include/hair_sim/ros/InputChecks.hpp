@@ -10,9 +10,11 @@ namespace hair_sim {
 
 /// Largest wind speed taken (m/s); faster winds are refused.
 constexpr double kMaxWindSpeed = 1000.0;
+/// Largest Wind turbulence taken (the fluctuation's standard deviation over the mean speed).
+constexpr double kMaxTurbulence = 10.0;
 
-/// A Wind command: finite velocity, turbulence and ramp_time; turbulence and ramp_time >= 0; speed at
-/// most kMaxWindSpeed. (Its frame is checked against tf by the node.)
+/// A Wind command: finite velocity, turbulence and ramp_time; turbulence in [0, kMaxTurbulence], ramp_time
+/// >= 0; speed at most kMaxWindSpeed. (Its frame is checked against tf by the node.)
 std::string checkWind(const hair_sim_msgs::Wind& msg);
 
 /// A transform for the tf buffer: a finite translation and rotation and a rotation quaternion that is
