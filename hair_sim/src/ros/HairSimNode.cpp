@@ -8,6 +8,7 @@
 #include <boost/bind/bind.hpp>
 #include <boost/make_shared.hpp>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <type_traits>
 
@@ -211,16 +212,27 @@ bool HairSimNode::lookupPose(const std::string& frame, const ros::Time& stamp, I
     pose = tf2::transformToEigen(t);
     if (found) *found = t.header.stamp;
     if (!pose.matrix().allFinite()) {
-      ROS_WARN_THROTTLE(5.0, "hair_sim: tf %s -> %s has non-finite values; holding the last good pose",
-                        config_.world_frame.c_str(), frame.c_str());
+      warnLookup(frame, "hair_sim: tf " + config_.world_frame + " -> " + frame +
+                            " has non-finite values; holding the last good pose");
       return false;
     }
     return true;
   } catch (const tf2::TransformException& e) {
-    ROS_WARN_THROTTLE(5.0, "hair_sim: no tf %s -> %s at %.3f: %s", config_.world_frame.c_str(), frame.c_str(),
-                      stamp.toSec(), e.what());
+    char at[32];
+    std::snprintf(at, sizeof(at), "%.3f", stamp.toSec());
+    warnLookup(frame,
+               "hair_sim: no tf " + config_.world_frame + " -> " + frame + " at " + at + ": " + e.what());
     return false;
   }
+}
+
+void HairSimNode::warnLookup(const std::string& frame, const std::string& text) {
+  // At most every 5 s per frame (one frame's failures, at every substep, do not hide another's).
+  const ros::WallTime now = ros::WallTime::now();
+  const auto it = last_lookup_warning_.find(frame);
+  if (it != last_lookup_warning_.end() && (now - it->second).toSec() < 5.0) return;
+  last_lookup_warning_[frame] = now;
+  ROS_WARN("%s", text.c_str());
 }
 
 Vec3 HairSimNode::windAt(double t) const {

@@ -71,9 +71,11 @@ class HairSimNode {
   /// Returns whether it was accepted; `message` says what was done or what was wrong.
   bool schedule(const hair_sim_msgs::HairEvent& msg, std::string* message);
   /// The one place that asks tf: pose of `frame` in world_frame at `stamp`; on failure warns at most
-  /// every few seconds (naming both frames and tf's reason) and returns false. stamp 0 = the newest;
+  /// every 5 s per frame (naming both frames and tf's reason) and returns false. stamp 0 = the newest;
   /// `found` receives the stamp of the transform used.
   bool lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose, ros::Time* found = nullptr);
+  /// lookupPose's warning about `frame`: at most every 5 s for that frame.
+  void warnLookup(const std::string& frame, const std::string& text);
   Vec3 windAt(double t) const;
   /// hair_state and hair_markers: the hair drawn with the head at `pose`, bodies at `body_frames`.
   void publishOutputs(const ros::Time& stamp, const Iso3& pose, const std::vector<Iso3>& body_frames);
@@ -110,6 +112,7 @@ class HairSimNode {
   ros::Time newest_head_stamp_;  ///< stamp of the newest head pose at the last update (time going back)
   double teleport_distance_ = 0.5, teleport_angle_ = 1.0;  ///< m, rad (between two head tf messages)
   std::map<std::string, std::pair<ros::WallTime, std::string>> last_warning_;  ///< warnThrottled
+  std::map<std::string, ros::WallTime> last_lookup_warning_;                   ///< lookupPose's, per frame
   geometry_msgs::TransformStamped last_head_tf_;      ///< the newest head transform received
   std::map<std::string, ros::Time> newest_tf_stamp_;  ///< child frame -> newest stamp taken
   int strands_per_strip_ = 6;
