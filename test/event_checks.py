@@ -142,11 +142,15 @@ class EventChecks(unittest.TestCase):
         self.assertAlmostEqual(min(yaws), -0.4, delta=0.02)
 
     def test_d_bad_events_are_rejected(self):
+        # Stamped 10 s back for 2 s: over before it arrived (else "scheduled", then dropped unseen).
+        past = HairEvent(type='wind', vector=Vector3(3.0, 0.0, 0.0), duration=2.0)
+        past.header.stamp = rospy.Time.now() - rospy.Duration(10.0)
         cases = [
             (HairEvent(type='wind', vector=Vector3(float('nan'), 0.0, 0.0)), 'velocity: [nan'),
             (HairEvent(type='breeze'), "type: 'breeze'"),
             (HairEvent(type='wind_gust', vector=Vector3(1.0, 0.0, 0.0), peak=9.0, period=1.0), 'peak: 9'),
             (HairEvent(type='nod', amplitude=0.2, frequency=float('inf')), 'frequency: inf'),
+            (past, 'ended before it arrived'),
         ]
         for event, named in cases:
             reply = self.trigger(event)

@@ -311,6 +311,13 @@ bool HairSimNode::schedule(const hair_sim_msgs::HairEvent& msg, std::string* mes
     *message = problem;
     return false;
   }
+  // Over before the hair's time gets to it: it would be dropped unseen at the next update.
+  const double now = started_ ? sim_time_.toSec() : ros::Time::now().toSec();
+  if (event.duration > 0.0 && event.start + event.duration < now) {
+    *message = "header.stamp: " + formatDouble(event.start) + " s + duration " +
+               formatDouble(event.duration) + " s ended before it arrived (t = " + formatDouble(now) + " s)";
+    return false;
+  }
   events_.add(event);
   *message = "scheduled " + msg.type + " at t = " + formatDouble(start.toSec()) + " s" +
              (event.duration > 0.0 ? " for " + formatDouble(event.duration) + " s" : " until replaced");
