@@ -17,6 +17,8 @@ same node, sends:
                            ros::Duration): the tf refused as ahead of the clock, the Wind taken on arrival
   test_j_turbulence        a Wind with turbulence 1e306 (the wind would be infinite)
   test_k_gap               no head tf for GAP s, longer than the 10 s tf cache: the hair steps on afterwards
+  test_l_body_lost         the neck body's frame (world -> neck, broadcast with the head) stops: the node holds
+                           the neck where it was last seen and the hair steps on; it says so, and when it is back
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
 given with each case), hair_state keeps coming at publish_rate (at least 80 % of it, stale period included),
@@ -96,6 +98,7 @@ class RobustnessChecks(unittest.TestCase):
     head = list(HOME)  # where the broadcaster puts the head
     quaternion = (0.0, 0.0, 0.0, 1.0)
     broadcasting = True
+    neck_broadcasting = True  # world -> neck (identity), the frame of the neck body in the test's config
     last_stamp = None  # newest head tf stamp sent
     root_offsets = None  # roots in head coordinates, from the first states
     last_step = None  # hair_state.step of the last state watched
@@ -149,8 +152,14 @@ class RobustnessChecks(unittest.TestCase):
         while not cls.stop.is_set() and not rospy.is_shutdown():
             with cls.lock:
                 go, position, q = cls.broadcasting, tuple(cls.head), cls.quaternion
+                neck = go and cls.neck_broadcasting
             if go:
-                cls.send(cls.transform(rospy.Time.now(), position, q))
+                stamp = rospy.Time.now()
+                cls.send(cls.transform(stamp, position, q))
+            if neck:
+                t = cls.transform(stamp, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+                t.child_frame_id = 'neck'
+                cls.tf_pub.publish(TFMessage(transforms=[t]))
             time.sleep(period)
 
     @classmethod
@@ -411,6 +420,22 @@ class RobustnessChecks(unittest.TestCase):
             type(self).broadcasting = True
         self.expect_log(since, 'skipping ahead to it, the hair carried rigidly')
         time.sleep(0.5)
+        self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
+
+    def test_l_body_lost(self):
+        head = tuple(self.head)
+        since = self.log_index()
+        with self.lock:
+            type(self).neck_broadcasting = False
+        time.sleep(1.0)
+        # The hair steps on (waiting for the neck instead, it would stop at its last pose for good), and says why.
+        self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
+        self.expect_log(since, "body 'neck': no tf world -> neck newer than max_tf_age (0.50 s): held where it was "
+                        "last seen")
+        since = self.log_index()
+        with self.lock:
+            type(self).neck_broadcasting = True
+        self.expect_log(since, "body 'neck': tf world -> neck fresh again", level=Log.INFO)
         self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
 
     def node_pid(self):

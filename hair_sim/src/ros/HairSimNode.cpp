@@ -9,6 +9,7 @@
 #include <boost/make_shared.hpp>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 #include <type_traits>
 
@@ -224,6 +225,36 @@ bool HairSimNode::lookupPose(const std::string& frame, const ros::Time& stamp, I
                "hair_sim: no tf " + config_.world_frame + " -> " + frame + " at " + at + ": " + e.what());
     return false;
   }
+}
+
+bool HairSimNode::bodyFrameAt(std::size_t b, const ros::Time& t, Iso3& frame) {
+  const Body& body = config_.bodies[b];
+  if (body_held_.size() != config_.bodies.size()) body_held_.assign(config_.bodies.size(), false);
+  if (lookupPose(body.frame, t, frame)) {
+    if (body_held_[b])
+      ROS_INFO("hair_sim: body '%s': tf %s -> %s fresh again", body.name.c_str(), config_.world_frame.c_str(),
+               body.frame.c_str());
+    body_held_[b] = false;
+    return true;
+  }
+  if (b >= last_body_frames_.size()) return false;  // never seen: wait for it
+  // Only behind the head (a slower source): wait for it. Stale (nothing newer than max_tf_age, or gone):
+  // held where it was last seen, as a stale head is, so that the hair goes on.
+  Iso3 newest;
+  ros::Time stamp;
+  const double age = lookupPose(body.frame, ros::Time(0), newest, &stamp)
+                         ? ros::Time::now().toSec() - stamp.toSec()
+                         : std::numeric_limits<double>::infinity();
+  if (age <= max_tf_age_) return false;
+  if (!body_held_[b]) {
+    ROS_WARN(
+        "hair_sim: body '%s': no tf %s -> %s newer than max_tf_age (%.2f s): held where it was last seen",
+        body.name.c_str(), config_.world_frame.c_str(), body.frame.c_str(), max_tf_age_);
+    diagnostics_->droppedInput("body " + body.name + ": tf stale, held");
+    body_held_[b] = true;
+  }
+  frame = last_body_frames_[b];
+  return true;
 }
 
 void HairSimNode::warnLookup(const std::string& frame, const std::string& text) {
@@ -689,7 +720,7 @@ void HairSimNode::update(bool from_tf) {
     }
     bool frames_ok = true;
     for (std::size_t b = 0; b < config_.bodies.size() && frames_ok; ++b)
-      frames_ok = lookupPose(config_.bodies[b].frame, t, frames[b]);
+      frames_ok = bodyFrameAt(b, t, frames[b]);
     if (!frames_ok) break;
     const HeadState head = head_.update(pose, dt);
     if (head_.teleported()) {

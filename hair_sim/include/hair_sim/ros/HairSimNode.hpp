@@ -76,6 +76,10 @@ class HairSimNode {
   bool lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose, ros::Time* found = nullptr);
   /// lookupPose's warning about `frame`: at most every 5 s for that frame.
   void warnLookup(const std::string& frame, const std::string& text);
+  /// Body b's frame at substep time t: from tf; else, when tf has nothing of it newer than max_tf_age (or
+  /// nothing at all) and it was seen before, where it was last seen (said once, and when it is fresh again);
+  /// false (wait) when it was never seen or is only behind the head.
+  bool bodyFrameAt(std::size_t b, const ros::Time& t, Iso3& frame);
   Vec3 windAt(double t) const;
   /// hair_state and hair_markers: the hair drawn with the head at `pose`, bodies at `body_frames`.
   void publishOutputs(const ros::Time& stamp, const Iso3& pose, const std::vector<Iso3>& body_frames);
@@ -113,6 +117,7 @@ class HairSimNode {
   double teleport_distance_ = 0.5, teleport_angle_ = 1.0;  ///< m, rad (between two head tf messages)
   std::map<std::string, std::pair<ros::WallTime, std::string>> last_warning_;  ///< warnThrottled
   std::map<std::string, ros::WallTime> last_lookup_warning_;                   ///< lookupPose's, per frame
+  std::vector<bool> body_held_;                       ///< per body: held at last_body_frames_ (bodyFrameAt)
   geometry_msgs::TransformStamped last_head_tf_;      ///< the newest head transform received
   std::map<std::string, ros::Time> newest_tf_stamp_;  ///< child frame -> newest stamp taken
   int strands_per_strip_ = 6;
