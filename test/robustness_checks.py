@@ -19,6 +19,8 @@ same node, sends:
   test_k_gap               no head tf for GAP s, longer than the 10 s tf cache: the hair steps on afterwards
   test_l_body_lost         the neck body's frame (world -> neck, broadcast with the head) stops: the node holds
                            the neck where it was last seen and the hair steps on; it says so, and when it is back
+  test_m_event_flood       wind events for an hour from now through `trigger`: the first 256 scheduled, the next
+                           refused (too many events scheduled); the hair steps on
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
 given with each case), hair_state keeps coming at publish_rate (at least 80 % of it, stale period included),
@@ -49,7 +51,8 @@ import rosgraph
 import rospy
 import rostest
 from geometry_msgs.msg import TransformStamped
-from hair_sim_msgs.msg import HairState, Wind
+from hair_sim_msgs.msg import HairEvent, HairState, Wind
+from hair_sim_msgs.srv import Trigger
 from rosgraph_msgs.msg import Log
 from tf2_msgs.msg import TFMessage
 
@@ -436,6 +439,23 @@ class RobustnessChecks(unittest.TestCase):
         with self.lock:
             type(self).neck_broadcasting = True
         self.expect_log(since, "body 'neck': tf world -> neck fresh again", level=Log.INFO)
+        self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
+
+    def test_m_event_flood(self):
+        head = tuple(self.head)
+        rospy.wait_for_service('trigger', timeout=10.0)
+        trigger = rospy.ServiceProxy('trigger', Trigger)
+        start = rospy.Time.now() + rospy.Duration(3600.0)  # pending for the rest of the test: harmless
+        for k in range(257):
+            event = HairEvent(type='wind', duration=1.0)
+            event.header.stamp = start + rospy.Duration(2.0 * k)
+            event.vector.x = 0.1
+            reply = trigger(event)
+            if k < 256:
+                self.assertTrue(reply.accepted, 'event %d refused: %s' % (k, reply.message))
+            else:
+                self.assertFalse(reply.accepted, 'event 257 scheduled: %s' % reply.message)
+                self.assertIn('too many events scheduled (256, at most 256)', reply.message)
         self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
 
     def node_pid(self):

@@ -342,6 +342,12 @@ bool HairSimNode::schedule(const hair_sim_msgs::HairEvent& msg, std::string* mes
     *message = problem;
     return false;
   }
+  // A bounded schedule: every substep weighs each event against the later ones of its type.
+  if (events_.size() >= kMaxScheduledEvents) {
+    *message = "too many events scheduled (" + std::to_string(events_.size()) + ", at most " +
+               std::to_string(kMaxScheduledEvents) + "): wait until some have ended";
+    return false;
+  }
   // Over before the hair's time gets to it: it would be dropped unseen at the next update.
   const double now = started_ ? sim_time_.toSec() : ros::Time::now().toSec();
   if (event.duration > 0.0 && event.start + event.duration < now) {

@@ -34,6 +34,8 @@ class HairSimNode {
   /// Reads the parameters and the config file; throws std::invalid_argument naming the parameter or
   /// key and value when one is bad.
   HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
+  /// Events scheduled and not yet ended, at most (more are refused, named, until some have ended).
+  static constexpr std::size_t kMaxScheduledEvents = 256;
 
  private:
   void readParameters();
