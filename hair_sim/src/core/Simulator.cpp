@@ -16,6 +16,7 @@
 #include "LaneWorkers.hpp"
 #include "RotationSeries.hpp"
 #include "StepLanes.hpp"
+#include "hair_sim/core/util/YamlReader.hpp"
 
 namespace hair_sim {
 
@@ -318,11 +319,7 @@ void Simulator::stepLanes(const StepInputs& in, const StepFrame& f) {
   // it to the boundary (added in the boundary's sweep, after both groups), or have a root (added after every
   // sweep): on 2 threads the two groups' sweeps never add to the same point, and their interleaving changes
   // no point's order.
-  for (SweepScratch& w : scratch_) {
-    w.extremes = SpringExtremes();
-    w.band_dist2.resize(max_band_pairs_);
-    w.band_outside.resize(max_band_pairs_);
-  }
+  for (SweepScratch& w : scratch_) w.extremes = SpringExtremes();
   lanes::BlockJob job;
   job.dt = f.dt, job.k = f.k, job.gamma = f.gamma, job.drag = f.drag;
   job.max_angle_step = params_.max_angle_step;
@@ -924,6 +921,10 @@ void Simulator::buildBandPairs() {
     max_band_pairs_ = std::max(max_band_pairs_, static_cast<std::size_t>(band_pair_start_[t + 1]));
     band_pair_start_[t + 1] += band_pair_start_[t];
   }
+  for (SweepScratch& w : scratch_) {  // a strip's band pairs at a time (stepLanes, computeSpringForces)
+    w.band_dist2.resize(max_band_pairs_);
+    w.band_outside.resize(max_band_pairs_);
+  }
   band_pairs_.resize(pairs.size());
   band_inv_rest2_.resize(pairs.size());
   band_rest_.resize(pairs.size());
@@ -960,8 +961,6 @@ void Simulator::computeSpringForces() {
     merge(scratch_[1].extremes);
   } else {
     SweepScratch& w = scratch_[0];
-    w.band_dist2.resize(max_band_pairs_);
-    w.band_outside.resize(max_band_pairs_);
     for (const int strip : sweep_order_) {
       const std::size_t si = static_cast<std::size_t>(strip);
       const int q0 = band_pair_start_[si], q1 = band_pair_start_[si + 1];
@@ -1688,17 +1687,15 @@ namespace {
 void checkStepInputs(const StepInputs& in) {
   auto vec = [](const char* what, const Vec3& v) {
     if (v.allFinite()) return;
-    char text[160];
-    std::snprintf(text, sizeof(text), "%s is (%g, %g, %g)", what, v.x(), v.y(), v.z());
-    throw std::invalid_argument(std::string("Simulator::step(...) : ") + text +
-                                ": not finite, the substep is not taken");
+    throw std::invalid_argument(std::string("Simulator::step(...) : ") + what + " is (" +
+                                formatDouble(v.x()) + ", " + formatDouble(v.y()) + ", " +
+                                formatDouble(v.z()) + "): not finite, the substep is not taken");
   };
-  auto pose = [](const std::string& what, const Iso3& p) {
-    if (!p.matrix().allFinite())
-      throw std::invalid_argument("Simulator::step(...) : " + what +
-                                  " has non-finite entries: the substep is not taken");
+  auto badPose = [](const std::string& what) {
+    return std::invalid_argument("Simulator::step(...) : " + what +
+                                 " has non-finite entries: the substep is not taken");
   };
-  pose("head.pose", in.head.pose);
+  if (!in.head.pose.matrix().allFinite()) throw badPose("head.pose");
   vec("head.linear_velocity", in.head.linear_velocity);
   vec("head.linear_acceleration", in.head.linear_acceleration);
   vec("head.angular_velocity", in.head.angular_velocity);
@@ -1706,7 +1703,7 @@ void checkStepInputs(const StepInputs& in) {
   vec("wind", in.wind);
   if (in.gravity) vec("gravity", *in.gravity);
   for (std::size_t b = 0; b < in.body_frames.size(); ++b)
-    pose("body_frames[" + std::to_string(b) + "]", in.body_frames[b]);
+    if (!in.body_frames[b].matrix().allFinite()) throw badPose("body_frames[" + std::to_string(b) + "]");
 }
 }  // namespace
 
