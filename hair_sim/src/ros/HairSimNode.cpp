@@ -65,6 +65,7 @@ bool readParam(const ros::NodeHandle& nh, const std::string& name, T& value) {
 
 HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(nh), pnh_(private_nh) {
   readParameters();
+  body_held_.assign(config_.bodies.size(), false);
   rebuild(loadHairstyle(config_.hairstyle_file));
   // Before any subscription: in a nodelet manager callbacks may start as soon as they exist.
   diagnostics_ = std::make_unique<HairSimDiagnostics>(
@@ -213,23 +214,26 @@ bool HairSimNode::lookupPose(const std::string& frame, const ros::Time& stamp, I
     pose = tf2::transformToEigen(t);
     if (found) *found = t.header.stamp;
     if (!pose.matrix().allFinite()) {
-      warnLookup(frame, "hair_sim: tf " + config_.world_frame + " -> " + frame +
-                            " has non-finite values; holding the last good pose");
+      warnThrottled("lookup " + frame,
+                    "hair_sim: tf " + config_.world_frame + " -> " + frame +
+                        " has non-finite values; holding the last good pose",
+                    5.0);
       return false;
     }
     return true;
   } catch (const tf2::TransformException& e) {
     char at[32];
     std::snprintf(at, sizeof(at), "%.3f", stamp.toSec());
-    warnLookup(frame,
-               "hair_sim: no tf " + config_.world_frame + " -> " + frame + " at " + at + ": " + e.what());
+    // At most every 5 s per frame: one frame's failures, at every substep, do not hide another's.
+    warnThrottled("lookup " + frame,
+                  "hair_sim: no tf " + config_.world_frame + " -> " + frame + " at " + at + ": " + e.what(),
+                  5.0);
     return false;
   }
 }
 
 bool HairSimNode::bodyFrameAt(std::size_t b, const ros::Time& t, Iso3& frame) {
   const Body& body = config_.bodies[b];
-  if (body_held_.size() != config_.bodies.size()) body_held_.assign(config_.bodies.size(), false);
   if (lookupPose(body.frame, t, frame)) {
     if (body_held_[b])
       ROS_INFO("hair_sim: body '%s': tf %s -> %s fresh again", body.name.c_str(), config_.world_frame.c_str(),
@@ -255,15 +259,6 @@ bool HairSimNode::bodyFrameAt(std::size_t b, const ros::Time& t, Iso3& frame) {
   }
   frame = last_body_frames_[b];
   return true;
-}
-
-void HairSimNode::warnLookup(const std::string& frame, const std::string& text) {
-  // At most every 5 s per frame (one frame's failures, at every substep, do not hide another's).
-  const ros::WallTime now = ros::WallTime::now();
-  const auto it = last_lookup_warning_.find(frame);
-  if (it != last_lookup_warning_.end() && (now - it->second).toSec() < 5.0) return;
-  last_lookup_warning_[frame] = now;
-  ROS_WARN("%s", text.c_str());
 }
 
 Vec3 HairSimNode::windAt(double t) const {
@@ -433,8 +428,8 @@ bool HairSimNode::onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs:
 void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event, bool is_static) {
   guarded("the tf callback", [&] {
     tf_received_ = ros::WallTime::now();
+    const ros::Time now = ros::Time::now();
     if (!is_static) {
-      const ros::Time now = ros::Time::now();
       if (now < last_tf_receipt_) {
         ROS_WARN("hair_sim: time jumped back %.3f s: clearing the tf buffer",
                  (last_tf_receipt_ - now).toSec());
@@ -466,7 +461,7 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
                                     t.transform.rotation.y * t.transform.rotation.y +
                                     t.transform.rotation.z * t.transform.rotation.z +
                                     t.transform.rotation.w * t.transform.rotation.w));
-      if (!is_static && !acceptTfStamp(fixed, authority)) continue;
+      if (!is_static && !acceptTfStamp(fixed, authority, now)) continue;
       if (!is_static && fixed.child_frame_id == config_.head_frame) holdBeforeJump(fixed, authority);
       if (fixed.header.stamp > newest) newest = fixed.header.stamp;
       try {
@@ -484,7 +479,7 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
     // Poses older than max_tf_age on arrival (the queue's backlog after the process stalled, or a late
     // source) are buffered without stepping and publishing for each: the next fresh one steps through them
     // all (within max_substeps_per_update), and the timer keeps the outputs going meanwhile.
-    const double late = ros::Time::now().toSec() - newest.toSec();
+    const double late = now.toSec() - newest.toSec();
     if (late > max_tf_age_) {
       ROS_WARN_THROTTLE(5.0,
                         "hair_sim: tf from %s is %.3f s old on arrival (max_tf_age %.2f s): buffered without "
@@ -517,7 +512,8 @@ void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const
   }
 }
 
-bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const std::string& authority) {
+bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const std::string& authority,
+                                const ros::Time& now) {
   const auto known = newest_tf_stamp_.find(t.child_frame_id);
   const ros::Time newest = known == newest_tf_stamp_.end() ? ros::Time() : known->second;
   const ros::Time& stamp = t.header.stamp;
@@ -531,7 +527,6 @@ bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const 
   // Ahead of the clock by more than the cache (a wrong clock, a bad stamp): taken, it would hold the frame's
   // later transforms back as out of date until the clock caught up. (Not while the clock is 0: use_sim_time
   // before the first /clock.)
-  const ros::Time now = ros::Time::now();
   const double ahead = stamp.toSec() - now.toSec();
   if (!now.isZero() && ahead > cache) {
     ROS_WARN_THROTTLE(5.0,
@@ -598,11 +593,13 @@ void HairSimNode::onSubscriberConnect() {
     ROS_DEBUG("hair_sim: TCP_NODELAY set on %d of %d subscriber connections", r.set, r.accepted);
 }
 
-void HairSimNode::warnThrottled(const std::string& what, const std::string& text) {
+void HairSimNode::warnThrottled(const std::string& what, const std::string& text, double every) {
   const ros::WallTime now = ros::WallTime::now();
   auto it = last_warning_.find(what);
-  if (it != last_warning_.end() && it->second.second == text && (now - it->second.first).toSec() < 2.0)
-    return;
+  if (it != last_warning_.end()) {
+    const double since = (now - it->second.first).toSec();
+    if (every > 0.0 ? since < every : it->second.second == text && since < 2.0) return;
+  }
   last_warning_[what] = {now, text};
   ROS_WARN("%s", text.c_str());
 }

@@ -52,8 +52,9 @@ class HairSimNode {
   /// One substep to t: the head state, the body frames, the wind and the events at t.
   void stepTo(const ros::Time& t, const HeadState& head, const std::vector<Iso3>& body_frames);
   /// A warning about `what` (tf, wind, event): said at once when it differs from the last one about it,
-  /// else at most every 2 s (a stream of the same bad input does not flood the log).
-  void warnThrottled(const std::string& what, const std::string& text);
+  /// else at most every 2 s (a stream of the same bad input does not flood the log). With `every` > 0, at
+  /// most every `every` s whatever the text (tf lookups, whose texts carry times).
+  void warnThrottled(const std::string& what, const std::string& text, double every = 0.0);
   /// A subscriber connected to an output: with ~tcp_nodelay, TCP_NODELAY on the connections accepted on the
   /// node's TCPROS port (setTcpNoDelayOnAccepted), as roscpp does when a subscriber asks for it.
   void onSubscriberConnect();
@@ -62,9 +63,11 @@ class HairSimNode {
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
   /// Stamp order of a non-static transform against the newest one of its child frame: false (with a
   /// throttled warning naming frame and stamps) for a repeated stamp or one older than the tf cache, which
-  /// tf2 would refuse with a TF_REPEATED_DATA or TF_OLD_DATA line on every message; older stamps within
-  /// the cache (out of order) are taken, counted and reported throttled.
-  bool acceptTfStamp(const geometry_msgs::TransformStamped& t, const std::string& authority);
+  /// tf2 would refuse with a TF_REPEATED_DATA or TF_OLD_DATA line on every message, or one further ahead of
+  /// `now` (the clock at the message's arrival) than the cache; older stamps within the cache (out of order)
+  /// are taken, counted and reported throttled.
+  bool acceptTfStamp(const geometry_msgs::TransformStamped& t, const std::string& authority,
+                     const ros::Time& now);
   void onWind(const hair_sim_msgs::Wind::ConstPtr& msg);
   bool onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response);
   void onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg);
@@ -76,8 +79,6 @@ class HairSimNode {
   /// every 5 s per frame (naming both frames and tf's reason) and returns false. stamp 0 = the newest;
   /// `found` receives the stamp of the transform used.
   bool lookupPose(const std::string& frame, const ros::Time& stamp, Iso3& pose, ros::Time* found = nullptr);
-  /// lookupPose's warning about `frame`: at most every 5 s for that frame.
-  void warnLookup(const std::string& frame, const std::string& text);
   /// Body b's frame at substep time t: from tf; else, when tf has nothing of it newer than max_tf_age (or
   /// nothing at all) and it was seen before, where it was last seen (said once, and when it is fresh again);
   /// false (wait) when it was never seen or is only behind the head.
@@ -118,7 +119,6 @@ class HairSimNode {
   ros::Time newest_head_stamp_;  ///< stamp of the newest head pose at the last update (time going back)
   double teleport_distance_ = 0.5, teleport_angle_ = 1.0;  ///< m, rad (between two head tf messages)
   std::map<std::string, std::pair<ros::WallTime, std::string>> last_warning_;  ///< warnThrottled
-  std::map<std::string, ros::WallTime> last_lookup_warning_;                   ///< lookupPose's, per frame
   std::vector<bool> body_held_;                       ///< per body: held at last_body_frames_ (bodyFrameAt)
   geometry_msgs::TransformStamped last_head_tf_;      ///< the newest head transform received
   std::map<std::string, ros::Time> newest_tf_stamp_;  ///< child frame -> newest stamp taken
