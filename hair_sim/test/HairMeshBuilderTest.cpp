@@ -68,12 +68,8 @@ TEST(HairMeshBuilderTest, TriangleBudgetChoosesTheLevel) {
   HairMeshOptions options;
   options.max_triangles = 5000;
   HairMeshBuilder builder(style, options);
-  std::vector<Vec3> points;
   std::vector<int> offsets;
-  for (const Strip& s : style.strips) {
-    offsets.push_back(static_cast<int>(points.size()));
-    points.insert(points.end(), s.points.begin(), s.points.end());
-  }
+  const std::vector<Vec3> points = test::styledPoints(style, &offsets);
   builder.build(points, offsets, style.scalp);
   // 100 strips of 2 x 5: 8 samples_across samples_along triangles each, so the ladder's levels (1, 1), (1,
   // 2), (1, 3), (2, 4) give 800, 1600, 2400, 6400: the finest within 5000 is (1, 3).
@@ -171,12 +167,8 @@ TEST(HairMeshBuilderTest, BuildRejectsBadStripOffsetsAndBuildsAfterwards) {
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
   const Hairstyle style = loadHairstyle(config.hairstyle_file);
   ASSERT_EQ(style.strips.size(), 100u);
-  std::vector<Vec3> points;
   std::vector<int> offsets;
-  for (const Strip& s : style.strips) {
-    offsets.push_back(static_cast<int>(points.size()));
-    points.insert(points.end(), s.points.begin(), s.points.end());
-  }
+  const std::vector<Vec3> points = test::styledPoints(style, &offsets);
   ASSERT_EQ(points.size(), 1000u);  // 100 strips of 2 x 5 control points
   const std::vector<Ellipsoid> bodies{
       Ellipsoid(style.scalp.center(), style.scalp.rotation(), style.scalp.radii() * 1.06)};

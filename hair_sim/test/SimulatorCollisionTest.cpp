@@ -414,8 +414,7 @@ TEST(SimulatorCollisionTest, SpringPairsBetweenStripsAreTheNearestWithinTheRadiu
   for (const Hairstyle& style :
        {loadHairstyle(config.hairstyle_file), generateHairstyle(config, rest, options)}) {
     const Simulator sim(style, config.physics, config.bodies);
-    std::vector<Vec3> styled;  // the hairstyle's points, in the Simulator's order (strip by strip)
-    for (const Strip& st : style.strips) styled.insert(styled.end(), st.points.begin(), st.points.end());
+    const std::vector<Vec3> styled = test::styledPoints(style);
     std::set<std::pair<int, int>> found;
     for (const SpringPair& s : sim.springs()) {
       if (s.within_strip) continue;

@@ -176,9 +176,7 @@ double maxDeviationAfterRest(Simulator& sim, double seconds) {
   in.head.pose.translation() = Vec3(0.0, 0.0, 1.6);
   const int steps = static_cast<int>(seconds / sim.parameters().substep);
   for (int i = 0; i < steps; ++i) sim.step(in);
-  std::vector<Vec3> styled;
-  for (const Strip& s : sim.hairstyle().strips) styled.insert(styled.end(), s.points.begin(), s.points.end());
-  return maxDistance(sim.positionsHead(), styled);
+  return maxDistance(sim.positionsHead(), test::styledPoints(sim.hairstyle()));
 }
 
 TEST(SimulatorTest, StyledDefaultHairstyleIsTheEquilibriumAtRest) {
@@ -318,6 +316,12 @@ StepInputs shakeInputs(const SimConfig& config, const Iso3& rest, int i, double 
   for (const Body& b : config.bodies)
     in.body_frames.push_back(b.frame == config.head_frame ? pose : Iso3::Identity());
   return in;
+}
+
+/// Substeps [from, to) of the shake (shakeInputs, amplitude 1).
+void shake(Simulator& sim, const SimConfig& config, const Iso3& rest, HeadMotionEstimator& head, int from,
+           int to) {
+  for (int i = from; i < to; ++i) sim.step(shakeInputs(config, rest, i, 1.0, head, sim.parameters().substep));
 }
 
 /// The default parameters without springs.
@@ -574,10 +578,6 @@ TEST(SimulatorTest, PathSwitchesAndResetKeepTheBitsOnEveryThreadCount) {
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
   const Iso3 rest = headRest();
   const Hairstyle style = generatedHairstyle(config, 600);
-  auto drive = [&](Simulator& sim, HeadMotionEstimator& head, int from, int to) {
-    for (int i = from; i < to; ++i)
-      sim.step(shakeInputs(config, rest, i, 1.0, head, sim.parameters().substep));
-  };
   auto run = [&](int threads, bool with_reset) {
     Simulator sim(style, config.physics, config.bodies);
     sim.setThreads(threads);
@@ -585,19 +585,19 @@ TEST(SimulatorTest, PathSwitchesAndResetKeepTheBitsOnEveryThreadCount) {
     head.reset(rest);
     if (with_reset) {  // a history before the reset: the Exact path, then the Lanes path
       sim.setStepPath(Simulator::StepPath::Exact);
-      drive(sim, head, 0, 10);
+      shake(sim, config, rest, head, 0, 10);
       sim.setStepPath(Simulator::StepPath::Lanes);
-      drive(sim, head, 10, 30);
+      shake(sim, config, rest, head, 10, 30);
       sim.reset();
       head.reset(rest);
     }
-    drive(sim, head, 0, 40);
+    shake(sim, config, rest, head, 0, 40);
     sim.setStepPath(Simulator::StepPath::Exact);
-    drive(sim, head, 40, 45);
+    shake(sim, config, rest, head, 40, 45);
     sim.setStepPath(Simulator::StepPath::LanesBaseline);
-    drive(sim, head, 45, 60);
+    shake(sim, config, rest, head, 45, 60);
     sim.setStepPath(Simulator::StepPath::Lanes);
-    drive(sim, head, 60, 80);
+    shake(sim, config, rest, head, 60, 80);
     return sim.positionsHead();
   };
   const std::vector<Vec3> reference = run(1, false);
@@ -645,29 +645,23 @@ TEST(SimulatorTest, SetThreadsTakesOneToSixtyFour) {
   // blocks: the helper sweeps) in a shake, 10 substeps before the move and 20 after it on 2 threads.
   const Iso3 rest = headRest();
   const Hairstyle style = generatedHairstyle(config, 600);
-  auto drive = [&](Simulator& s, HeadMotionEstimator& head, int from, int to) {
-    for (int i = from; i < to; ++i) s.step(shakeInputs(config, rest, i, 1.0, head, s.parameters().substep));
-  };
   HeadMotionEstimator head_a, head_b;
   head_a.reset(rest);
   head_b.reset(rest);
   Simulator before(style, config.physics, config.bodies), twin(style, config.physics, config.bodies);
-  drive(before, head_a, 0, 10);
-  drive(twin, head_b, 0, 10);
+  shake(before, config, rest, head_a, 0, 10);
+  shake(twin, config, rest, head_b, 0, 10);
   Simulator moved(std::move(before));
   moved.setThreads(2);
   twin.setThreads(2);
-  drive(moved, head_a, 10, 30);
-  drive(twin, head_b, 10, 30);
+  shake(moved, config, rest, head_a, 10, 30);
+  shake(twin, config, rest, head_b, 10, 30);
   ASSERT_EQ(moved.positionsHead().size(), twin.positionsHead().size());
   EXPECT_EQ(0, std::memcmp(moved.positionsHead().data(), twin.positionsHead().data(),
                            twin.positionsHead().size() * sizeof(Vec3)));
   EXPECT_EQ(moved.stepCount(), 30);
-  double moved_by = 0.0;  // the shake moved the hair (the comparison is not of two still states)
-  std::size_t k = 0;
-  for (const Strip& st : style.strips)
-    for (const Vec3& p : st.points) moved_by = std::max(moved_by, (twin.positionsHead()[k++] - p).norm());
-  EXPECT_GT(moved_by, 1e-3);
+  // The shake moved the hair (the comparison is not of two still states).
+  EXPECT_GT(maxDistance(twin.positionsHead(), test::styledPoints(style)), 1e-3);
 }
 
 TEST(SimulatorTest, LanePathFollowsTheExactStep) {
@@ -838,10 +832,8 @@ TEST(SimulatorTest, StepRefusesNonFiniteInputsAndKeepsTheState) {
   HeadMotionEstimator head, head_twin;
   head.reset(rest);
   head_twin.reset(rest);
-  for (int i = 0; i < 20; ++i) {
-    sim.step(shakeInputs(config, rest, i, 1.0, head, sim.parameters().substep));
-    twin.step(shakeInputs(config, rest, i, 1.0, head_twin, twin.parameters().substep));
-  }
+  shake(sim, config, rest, head, 0, 20);
+  shake(twin, config, rest, head_twin, 0, 20);
   const StepInputs good = shakeInputs(config, rest, 20, 1.0, head, sim.parameters().substep);
   const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
   const Vec3 up_inf(0.0, 0.0, -inf);
@@ -866,7 +858,7 @@ TEST(SimulatorTest, StepRefusesNonFiniteInputsAndKeepsTheState) {
         << c.first;
   }
   sim.step(good);
-  twin.step(shakeInputs(config, rest, 20, 1.0, head_twin, twin.parameters().substep));
+  shake(twin, config, rest, head_twin, 20, 21);
   EXPECT_EQ(
       0, std::memcmp(twin.positionsHead().data(), sim.positionsHead().data(), before.size() * sizeof(Vec3)));
 }
@@ -1022,7 +1014,10 @@ TEST(SimulatorTest, SpringForcesComputedAfreshGiveTheSweepsBits) {
   HeadMotionEstimator head;
   head.reset(rest);
   int i = 0;
-  auto step = [&] { sim.step(shakeInputs(config, rest, i++, 1.0, head, sim.parameters().substep)); };
+  auto step = [&] {
+    shake(sim, config, rest, head, i, i + 1);
+    ++i;
+  };
   step();
   step();
   EXPECT_TRUE(sim.springForcesFromSweeps());

@@ -86,6 +86,18 @@ inline std::vector<Body> axisBalls(const Vec3& o, double c, double negative, dou
   return bodies;
 }
 
+/// Every strip's control points in one array, strip by strip (the Simulator's order, positionsHead()); each
+/// strip's first index into `offsets` when given.
+inline std::vector<Vec3> styledPoints(const Hairstyle& style, std::vector<int>* offsets = nullptr) {
+  std::vector<Vec3> points;
+  if (offsets) offsets->clear();
+  for (const Strip& s : style.strips) {
+    if (offsets) offsets->push_back(static_cast<int>(points.size()));
+    points.insert(points.end(), s.points.begin(), s.points.end());
+  }
+  return points;
+}
+
 /// How far the deepest control point below the roots lies inside a body inflated by its strip's thickness
 /// margin (m; 0: none inside), from the geometry alone, without the Simulator's bodies or counters: each
 /// point (head frame, `points`, strip by strip as `offsets`) taken to the world by `head_pose`, into body
