@@ -421,9 +421,10 @@ class RobustnessChecks(unittest.TestCase):
         since = self.log_index()
         with self.lock:
             type(self).broadcasting = True
-        self.expect_log(since, 'skipping ahead to it, the hair carried rigidly')
         time.sleep(0.5)
+        # The hair steps on (waiting for poses tf no longer has, it would stop for good), and says why.
         self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
+        self.expect_log(since, 'skipping ahead to it, the hair carried rigidly')
 
     def test_l_body_lost(self):
         head = tuple(self.head)
