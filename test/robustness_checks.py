@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """rostest node for robustness.test: bad input and faults sent to the real hair_sim_node (issue 8).
 
-The test broadcasts world -> head itself (upright head, TF_RATE Hz, stamped now) and, in this order on the
-same node, sends:
+The test broadcasts world -> odom -> head itself (odom at the world's origin, an upright head, TF_RATE Hz, both
+in one message stamped now) and, in this order on the same node, sends:
 
   test_a_nan_tf            a head tf with translation.x = NaN, then one with rotation.w = inf
   test_b_zero_quaternion   a head tf with the rotation quaternion (0, 0, 0, 0)
@@ -21,6 +21,10 @@ same node, sends:
                            the neck where it was last seen and the hair steps on; it says so, and when it is back
   test_m_event_flood       wind events for an hour from now through `trigger`: the first 256 scheduled, the next
                            refused (too many events scheduled); the hair steps on
+  test_n_odom_teleport     world -> odom, the frame above the head, jumps 1.0 m sideways between two messages
+                           (a localisation's correction): the hair goes with the head rigidly, as in test_g
+  test_o_body_jump         world -> neck jumps 1.0 m down between two messages: held until the new one (the
+                           neck jumps within one substep, not swept through the hair over 10 ms), said
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
 given with each case), hair_state keeps coming at publish_rate (at least 80 % of it, stale period included),
@@ -31,7 +35,7 @@ broadcast last as good, turned as it was (within ROOT_TOLERANCE: a bad pose must
 a normalised one must have turned it). For the teleport:
 the tips, in head coordinates, move less than TELEPORT_TIP_MOVE m from just before the jump to 0.2 s after
 it (the hair is carried rigidly; interpolated over one tf period instead, the head moves at 100 m/s and the
-tips swing by tens of cm), and the node logs the jump. For the stall: the node says it skipped ahead
+tips swing by tens of cm), and the node logs the jump; for odom's jump, it names odom's as well. For the stall: the node says it skipped ahead
 (max_substeps_per_update), that it buffered the queued tf without stepping for each (no burst of outputs),
 and from 0.5 s after it publishes at its rate again (no spiral of death): at least 80 % of publish_rate and
 at most STALL_RATE_MAX x publish_rate.
@@ -98,10 +102,12 @@ class RobustnessChecks(unittest.TestCase):
     lock = threading.Lock()
     states = []  # (receipt wall time, HairState)
     logs = []  # (level, text) from the node
-    head = list(HOME)  # where the broadcaster puts the head
+    head = list(HOME)  # where the broadcaster puts the head in odom
+    odom = (0.0, 0.0, 0.0)  # where the broadcaster puts odom in the world (no rotation)
     quaternion = (0.0, 0.0, 0.0, 1.0)
     broadcasting = True
-    neck_broadcasting = True  # world -> neck (identity), the frame of the neck body in the test's config
+    neck_broadcasting = True  # world -> neck, the frame of the neck body in the test's config
+    neck = (0.0, 0.0, 0.0)  # where the broadcaster puts neck in the world (no rotation)
     last_stamp = None  # newest head tf stamp sent
     root_offsets = None  # roots in head coordinates, from the first states
     last_step = None  # hair_state.step of the last state watched
@@ -139,10 +145,10 @@ class RobustnessChecks(unittest.TestCase):
                 cls.logs.append((msg.level, msg.msg))
 
     @classmethod
-    def transform(cls, stamp, position, q):
+    def transform(cls, stamp, position, q, parent='odom'):
         t = TransformStamped()
         t.header.stamp = stamp
-        t.header.frame_id = cls.world_frame
+        t.header.frame_id = parent
         t.child_frame_id = cls.head_frame
         t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = position
         r = t.transform.rotation
@@ -154,23 +160,26 @@ class RobustnessChecks(unittest.TestCase):
         period = 1.0 / TF_RATE
         while not cls.stop.is_set() and not rospy.is_shutdown():
             with cls.lock:
-                go, position, q = cls.broadcasting, tuple(cls.head), cls.quaternion
+                go, position, q, odom, neck_at = cls.broadcasting, tuple(cls.head), cls.quaternion, cls.odom, cls.neck
                 neck = go and cls.neck_broadcasting
             if go:
                 stamp = rospy.Time.now()
-                cls.send(cls.transform(stamp, position, q))
+                above = cls.transform(stamp, odom, (0.0, 0.0, 0.0, 1.0), parent=cls.world_frame)
+                above.child_frame_id = 'odom'
+                cls.send(cls.transform(stamp, position, q), above)
             if neck:
-                t = cls.transform(stamp, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+                t = cls.transform(stamp, neck_at, (0.0, 0.0, 0.0, 1.0), parent=cls.world_frame)
                 t.child_frame_id = 'neck'
                 cls.tf_pub.publish(TFMessage(transforms=[t]))
             time.sleep(period)
 
     @classmethod
-    def send(cls, t):
+    def send(cls, t, above=None):
+        """A head transform (with `above`, world -> odom, in the same message first)."""
         with cls.lock:
             if cls.last_stamp is None or t.header.stamp > cls.last_stamp:
                 cls.last_stamp = t.header.stamp
-        cls.tf_pub.publish(TFMessage(transforms=[t]))
+        cls.tf_pub.publish(TFMessage(transforms=[above, t] if above is not None else [t]))
 
     @classmethod
     def send_raw(cls, t):
@@ -330,28 +339,38 @@ class RobustnessChecks(unittest.TestCase):
         self.expect_log(since, 'fresh again', level=Log.INFO)
         self.watch(WATCH, HOME)
 
-    def test_g_teleport(self):
+    def rigid_over_jump(self, head, yaw, new_head, new_yaw, move):
+        """The worst move of the tips in head coordinates from just before `move()` jumps the head from `head`
+        turned by `yaw` (in the world) to `new_head` turned by `new_yaw`, to 0.2 s after it."""
         time.sleep(1.0)
         with self.lock:
             before = self.states[-1][1]
-        since = self.log_index()
-        far = (HOME[0], HOME[1] + TELEPORT, HOME[2])
         with self.lock:
-            type(self).head = list(far)
-            type(self).quaternion = quat_yaw(TELEPORT_YAW)
+            move()
         t0 = time.time()
         time.sleep(0.2)
         with self.lock:
             after = [m for (w, m) in self.states if w > t0 - 0.2]
-        tips_before = self.tips(before, HOME)
+        tips_before = self.tips(before, head, yaw)
+        offset = rotate_yaw(self.root_offsets[0], yaw)
         worst = 0.0
         for msg in after:
-            # States stamped before the jump still show the head at home: compare each with its own head.
+            # States stamped before the jump still show the head where it was: compare each with its own head.
             root = strip_points(msg.strips[0])[0]
-            jumped = abs(root.y - HOME[1] - self.root_offsets[0][1]) > TELEPORT / 2
-            tips = self.tips(msg, far, TELEPORT_YAW) if jumped else self.tips(msg, HOME)
+            jumped = math.hypot(root.x - head[0] - offset[0], root.y - head[1] - offset[1]) > TELEPORT / 2
+            tips = self.tips(msg, new_head, new_yaw) if jumped else self.tips(msg, head, yaw)
             worst = max(worst, max(math.sqrt(sum((a - b) ** 2 for a, b in zip(t, r)))
                                    for t, r in zip(tips, tips_before)))
+        return worst
+
+    def test_g_teleport(self):
+        since = self.log_index()
+        far = (HOME[0], HOME[1] + TELEPORT, HOME[2])
+
+        def move():
+            type(self).head = list(far)
+            type(self).quaternion = quat_yaw(TELEPORT_YAW)
+        worst = self.rigid_over_jump(HOME, 0.0, far, TELEPORT_YAW, move)
         rospy.loginfo('%s: teleport of %.1f m: tips moved at most %.1f mm in head coordinates', NAME, TELEPORT,
                       1e3 * worst)
         self.assertLess(worst, TELEPORT_TIP_MOVE, 'tips moved %.3f m relative to the head over the teleport' % worst)
@@ -457,6 +476,32 @@ class RobustnessChecks(unittest.TestCase):
             else:
                 self.assertFalse(reply.accepted, 'event 257 scheduled: %s' % reply.message)
                 self.assertIn('too many events scheduled (256, at most 256)', reply.message)
+        self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
+
+    def test_n_odom_teleport(self):
+        head = tuple(self.head)  # odom is at the world's origin until now
+        new_head = (head[0], head[1] + TELEPORT, head[2])
+        since = self.log_index()
+
+        def move():
+            type(self).odom = (0.0, TELEPORT, 0.0)
+        worst = self.rigid_over_jump(head, TELEPORT_YAW, new_head, TELEPORT_YAW, move)
+        rospy.loginfo('%s: odom jumped %.1f m: tips moved at most %.1f mm in head coordinates', NAME, TELEPORT,
+                      1e3 * worst)
+        self.assertLess(worst, TELEPORT_TIP_MOVE, 'tips moved %.3f m relative to the head over the jump of odom' %
+                        worst)
+        said = self.expect_log(since, 'jumped 1.000 m and 0.000 rad between two messages')
+        self.assertIn('tf %s -> odom from ' % self.world_frame, said)
+        self.expect_log(since, 'the head jumped 1.000 m and 0.000 rad')
+        self.steps_on(self.watch(WATCH, new_head, TELEPORT_YAW))
+
+    def test_o_body_jump(self):
+        head = tuple(a + b for a, b in zip(self.head, self.odom))
+        since = self.log_index()
+        with self.lock:
+            type(self).neck = (0.0, 0.0, -TELEPORT)
+        said = self.expect_log(since, 'jumped 1.000 m and 0.000 rad between two messages')
+        self.assertIn('tf %s -> neck from ' % self.world_frame, said)
         self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
 
     def node_pid(self):

@@ -435,7 +435,7 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
                  (last_tf_receipt_ - now).toSec());
         tf_buffer_.clear();
         newest_tf_stamp_.clear();
-        last_head_tf_ = geometry_msgs::TransformStamped();
+        last_tf_.clear();
       }
       last_tf_receipt_ = now;
     }
@@ -462,7 +462,8 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
                                     t.transform.rotation.z * t.transform.rotation.z +
                                     t.transform.rotation.w * t.transform.rotation.w));
       if (!is_static && !acceptTfStamp(fixed, authority, now)) continue;
-      if (!is_static && fixed.child_frame_id == config_.head_frame) holdBeforeJump(fixed, authority);
+      parent_frame_[fixed.child_frame_id] = fixed.header.frame_id;
+      if (!is_static && movesHairFrames(fixed.child_frame_id)) holdBeforeJump(fixed, authority);
       if (fixed.header.stamp > newest) newest = fixed.header.stamp;
       try {
         tf_buffer_.setTransform(fixed, authority, is_static);
@@ -491,25 +492,53 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
   });
 }
 
+bool HairSimNode::movesHairFrames(const std::string& child) const {
+  auto above = [&](std::string frame) {  // frame is child or has child above it
+    for (std::size_t depth = 0; depth <= parent_frame_.size(); ++depth) {  // bounded: a loop in the tree
+      if (frame == child) return true;
+      const auto parent = parent_frame_.find(frame);
+      if (parent == parent_frame_.end()) return false;
+      frame = parent->second;
+    }
+    return false;
+  };
+  if (above(config_.head_frame)) return true;
+  for (const Body& body : config_.bodies)
+    if (above(body.frame)) return true;
+  return false;
+}
+
 void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority) {
-  const geometry_msgs::TransformStamped previous = last_head_tf_;
+  geometry_msgs::TransformStamped& last = last_tf_[t.child_frame_id];
+  const geometry_msgs::TransformStamped previous = last;
   if (!(t.header.stamp > previous.header.stamp)) return;  // out of order: the newest one stays the reference
-  last_head_tf_ = t;
+  last = t;
   if (previous.header.frame_id != t.header.frame_id) return;
   const Iso3 a = tf2::transformToEigen(previous), b = tf2::transformToEigen(t);
   const double distance = (b.translation() - a.translation()).norm();
   const double angle = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
   if (distance <= teleport_distance_ && angle <= teleport_angle_) return;
   // tf would interpolate the jump over the time between the two messages, a whip of the hair across the
-  // scene; held at the old pose until just before the new one, the head jumps within one substep, which
-  // the head motion estimator takes as a teleport (the hair goes with the head rigidly).
+  // scene; held at the old pose until just before the new one, the frame jumps within one substep. For
+  // the head (its own frame or one above it) the head motion estimator takes that as a teleport: the hair
+  // goes with the head rigidly, and the step says so.
   geometry_msgs::TransformStamped hold = previous;
   hold.header.stamp = t.header.stamp - ros::Duration(1e-6);
   if (!(hold.header.stamp > previous.header.stamp)) return;
   try {
     tf_buffer_.setTransform(hold, authority, false);
   } catch (const tf2::TransformException&) {
+    return;
   }
+  if (t.child_frame_id == config_.head_frame) return;
+  char text[512];
+  std::snprintf(text, sizeof(text),
+                "hair_sim: tf %s -> %s from %s jumped %.3f m and %.3f rad between two messages "
+                "(teleport_distance %.3f m, teleport_angle %.3f rad): held until the new one, so the frames "
+                "below it jump within one substep",
+                t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(), distance, angle,
+                teleport_distance_, teleport_angle_);
+  warnThrottled("jump of " + t.child_frame_id, text);
 }
 
 bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const std::string& authority,

@@ -58,9 +58,15 @@ class HairSimNode {
   /// A subscriber connected to an output: with ~tcp_nodelay, TCP_NODELAY on the connections accepted on the
   /// node's TCPROS port (setTcpNoDelayOnAccepted), as roscpp does when a subscriber asks for it.
   void onSubscriberConnect();
-  /// A head transform that jumps beyond the teleport limits from the previous one: the previous one is
-  /// put in the buffer again just before it, so that the jump falls within one substep (a teleport).
+  /// A transform of the head frame, of a body's frame or of a frame above either (map -> odom, say) that
+  /// jumps beyond the teleport limits from the previous one of its child frame: the previous one is put in
+  /// the buffer again just before it, so that the jump falls within one substep (a teleport of the head, or
+  /// a body that jumps) instead of a sweep that tf would interpolate between the two messages. Said for any
+  /// frame but the head's own (whose teleport the step reports).
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
+  /// Whether `child` is the head frame, a body's frame or a frame above one of them in the tree tf has
+  /// seen (parent_frame_).
+  bool movesHairFrames(const std::string& child) const;
   /// Stamp order of a non-static transform against the newest one of its child frame: false (with a
   /// throttled warning naming frame and stamps) for a repeated stamp or one older than the tf cache, which
   /// tf2 would refuse with a TF_REPEATED_DATA or TF_OLD_DATA line on every message, or one further ahead of
@@ -119,8 +125,10 @@ class HairSimNode {
   ros::Time newest_head_stamp_;  ///< stamp of the newest head pose at the last update (time going back)
   double teleport_distance_ = 0.5, teleport_angle_ = 1.0;  ///< m, rad (between two head tf messages)
   std::map<std::string, std::pair<ros::WallTime, std::string>> last_warning_;  ///< warnThrottled
-  std::vector<bool> body_held_;                       ///< per body: held at last_body_frames_ (bodyFrameAt)
-  geometry_msgs::TransformStamped last_head_tf_;      ///< the newest head transform received
+  std::vector<bool> body_held_;  ///< per body: held at last_body_frames_ (bodyFrameAt)
+  /// child frame -> the newest non-static transform received of it (holdBeforeJump)
+  std::map<std::string, geometry_msgs::TransformStamped> last_tf_;
+  std::map<std::string, std::string> parent_frame_;   ///< child frame -> parent, from the tf received
   std::map<std::string, ros::Time> newest_tf_stamp_;  ///< child frame -> newest stamp taken
   int strands_per_strip_ = 6;
 
