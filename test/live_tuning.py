@@ -14,6 +14,8 @@
       5. hinge_stiffness x 10: the steady displacement drops below d_wind / 2 (a stiffer hinge bends less).
       6. spring_contact_fraction is 0.8 (the config file's and the default); 1.0 is taken and the hair keeps
          stepping.
+      7. hinge_damping 5, beyond the cfg's [0, 0.1]: the server clamps it, the reply and the configuration
+         say 0.1, and the hair keeps stepping.
       Throughout, HairState.step only grows: a change never resets the simulation.
 
 Private parameters: node (default /hair_sim).
@@ -170,6 +172,15 @@ class LiveTuning(unittest.TestCase):
         with self.lock:
             before = self.steps[-1]
         self.wait_for(lambda: self.steps[-1] > before + 30, 5.0, 'substeps after spring_contact_fraction 1')
+
+        # 7. A value beyond the cfg's range is clamped to its edge by the server (the reply says so); the hair
+        # keeps stepping with it.
+        answer = self.reconfigure(hinge_damping=5.0)
+        self.assertEqual(answer['hinge_damping'], 0.1, 'hinge_damping 5 beyond [0, 0.1]: the reply')
+        self.assertEqual(self.client.get_configuration(timeout=5.0)['hinge_damping'], 0.1)
+        with self.lock:
+            before = self.steps[-1]
+        self.wait_for(lambda: self.steps[-1] > before + 30, 5.0, 'substeps after hinge_damping 0.1')
 
         with self.lock:
             steps = list(self.steps)
