@@ -462,8 +462,8 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
                                     t.transform.rotation.z * t.transform.rotation.z +
                                     t.transform.rotation.w * t.transform.rotation.w));
       if (!is_static && !acceptTfStamp(fixed, authority, now)) continue;
-      parent_frame_[fixed.child_frame_id] = fixed.header.frame_id;
-      if (!is_static && movesHairFrames(fixed.child_frame_id)) holdBeforeJump(fixed, authority);
+      noteParent(fixed.child_frame_id, fixed.header.frame_id);
+      if (!is_static && hair_frames_.count(fixed.child_frame_id) != 0) holdBeforeJump(fixed, authority);
       if (fixed.header.stamp > newest) newest = fixed.header.stamp;
       try {
         tf_buffer_.setTransform(fixed, authority, is_static);
@@ -492,20 +492,20 @@ void HairSimNode::onTf(const ros::MessageEvent<tf2_msgs::TFMessage const>& event
   });
 }
 
-bool HairSimNode::movesHairFrames(const std::string& child) const {
-  auto above = [&](std::string frame) {  // frame is child or has child above it
-    for (std::size_t depth = 0; depth <= parent_frame_.size(); ++depth) {  // bounded: a loop in the tree
-      if (frame == child) return true;
-      const auto parent = parent_frame_.find(frame);
-      if (parent == parent_frame_.end()) return false;
-      frame = parent->second;
+void HairSimNode::noteParent(const std::string& child, const std::string& parent) {
+  const auto known = parent_frame_.find(child);
+  if (known != parent_frame_.end() && known->second == parent) return;
+  parent_frame_[child] = parent;
+  hair_frames_.clear();
+  auto climb = [&](std::string frame) {
+    while (hair_frames_.insert(frame).second) {  // stops at a frame already in (a loop in the tree, too)
+      const auto up = parent_frame_.find(frame);
+      if (up == parent_frame_.end()) return;
+      frame = up->second;
     }
-    return false;
   };
-  if (above(config_.head_frame)) return true;
-  for (const Body& body : config_.bodies)
-    if (above(body.frame)) return true;
-  return false;
+  climb(config_.head_frame);
+  for (const Body& body : config_.bodies) climb(body.frame);
 }
 
 void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority) {

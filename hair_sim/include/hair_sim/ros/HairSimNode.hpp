@@ -16,6 +16,7 @@
 
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -64,9 +65,8 @@ class HairSimNode {
   /// a body that jumps) instead of a sweep that tf would interpolate between the two messages. Said for any
   /// frame but the head's own (whose teleport the step reports).
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
-  /// Whether `child` is the head frame, a body's frame or a frame above one of them in the tree tf has
-  /// seen (parent_frame_).
-  bool movesHairFrames(const std::string& child) const;
+  /// Records `parent` as `child`'s parent frame (parent_frame_); when that is news, hair_frames_ again.
+  void noteParent(const std::string& child, const std::string& parent);
   /// Stamp order of a non-static transform against the newest one of its child frame: false (with a
   /// throttled warning naming frame and stamps) for a repeated stamp or one older than the tf cache, which
   /// tf2 would refuse with a TF_REPEATED_DATA or TF_OLD_DATA line on every message, or one further ahead of
@@ -128,7 +128,9 @@ class HairSimNode {
   std::vector<bool> body_held_;  ///< per body: held at last_body_frames_ (bodyFrameAt)
   /// child frame -> the newest non-static transform received of it (holdBeforeJump)
   std::map<std::string, geometry_msgs::TransformStamped> last_tf_;
-  std::map<std::string, std::string> parent_frame_;   ///< child frame -> parent, from the tf received
+  std::map<std::string, std::string> parent_frame_;  ///< child frame -> parent, from the tf received
+  /// The head frame, the bodies' frames and every frame above them in parent_frame_ (holdBeforeJump's)
+  std::set<std::string> hair_frames_;
   std::map<std::string, ros::Time> newest_tf_stamp_;  ///< child frame -> newest stamp taken
   int strands_per_strip_ = 6;
 
