@@ -46,6 +46,19 @@ TEST(YamlReaderTest, BadFilesAreNamed) {
   EXPECT_NE(m.find("syntax"), std::string::npos) << m;
   m = test::errorOf([] { YamlReader::loadFile(test::writeTemp("list.yaml", "- 1\n- 2\n")); });
   EXPECT_NE(m.find("top level"), std::string::npos) << m;
+  // A directory opens, then fails to read (basic_filebuf::underflow without a path, before).
+  const std::string file = test::writeTemp("in_a_dir.yaml", "a: 1\n");
+  const std::string dir = file.substr(0, file.find_last_of('/'));
+  m = test::errorOf([&] { YamlReader::loadFile(dir); });
+  EXPECT_EQ(m, dir + ": is a directory, not a file");
+}
+
+TEST(YamlReaderTest, AKeyGivenTwiceIsNamedWithBothLines) {
+  // yaml-cpp keeps both and a lookup finds the first: the second, a likely edit, was ignored before.
+  const YamlReader y = reader("a: 1\nb: 2\na: 3\n");
+  const std::string m = test::errorOf([&] { y.requireKeys({"a", "b"}); });
+  EXPECT_NE(m.find("reader.yaml: a (line 3): key 'a' given twice (first on line 1)"), std::string::npos) << m;
+  EXPECT_NO_THROW(reader("a: 1\nb: 2\n").requireKeys({"a", "b"}));
 }
 
 TEST(YamlReaderTest, FormatDoubleRoundTrips) {

@@ -2,9 +2,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
+#include <vector>
 
 namespace hair_sim {
 
@@ -17,6 +20,11 @@ YamlReader YamlReader::loadFile(const std::string& path) {
   } catch (const YAML::ParserException& e) {
     throw std::invalid_argument(path + " (line " + std::to_string(e.mark.line + 1) +
                                 "): YAML syntax error: " + e.msg);
+  } catch (const std::exception& e) {  // a directory opens but cannot be read (basic_filebuf::underflow)
+    std::error_code ignored;
+    if (std::filesystem::is_directory(path, ignored))
+      throw std::invalid_argument(path + ": is a directory, not a file");
+    throw std::invalid_argument(path + ": cannot read the file (" + e.what() + ")");
   }
   if (!root.IsMap()) {
     throw std::invalid_argument(path + ": the top level must be a map of keys, got " +
@@ -75,12 +83,21 @@ std::size_t YamlReader::size() const { return node_.size(); }
 
 void YamlReader::requireKeys(std::initializer_list<const char*> allowed) const {
   if (!node_.IsMap()) throw error("", "expected a map, got " + show(node_));
+  std::vector<YAML::Node> seen;  // yaml-cpp keeps a repeated key, and lookups find its first value
   for (const auto& kv : node_) {
     // A key must be a plain name: `{[1, 2]: x}` or `{? {a: b}}` parse as maps with a list or map key.
     if (!kv.first.IsScalar())
       throw std::invalid_argument(where(kv.first, key_path_) + ": a key must be a name, got " +
                                   show(kv.first));
     const std::string key = kv.first.Scalar();
+    for (const YAML::Node& earlier : seen)
+      if (earlier.Scalar() == key)
+        throw std::invalid_argument(
+            where(kv.first, childPath(key)) + ": key '" + key + "' given twice (first" +
+            (earlier.Mark().line >= 0 ? " on line " + std::to_string(earlier.Mark().line + 1)
+                                      : std::string()) +
+            ")");
+    seen.push_back(kv.first);
     bool ok = false;
     for (const char* a : allowed) ok = ok || key == a;
     if (!ok) {
@@ -177,6 +194,18 @@ Vec3 YamlReader::getVec3(const std::string& key) const { return child(key).asVec
 
 Vec3 YamlReader::getVec3(const std::string& key, const Vec3& fallback) const {
   return has(key) ? getVec3(key) : fallback;
+}
+
+Vec3 YamlReader::getVec3Within(const std::string& key, double max_abs, const std::string& unit) const {
+  const Vec3 v = getVec3(key);
+  if (!(v.cwiseAbs().maxCoeff() <= max_abs))
+    throw error(key, "every coordinate must be within +-" + formatDouble(max_abs) + " " + unit + ", got " +
+                         show(node_[key]));
+  return v;
+}
+
+Vec3 YamlReader::getRpy(const std::string& key) const {
+  return has(key) ? getVec3Within(key, 4.0 * 3.14159265358979323846, "rad (4 pi)") : Vec3::Zero();
 }
 
 std::string formatDouble(double v) {

@@ -48,6 +48,10 @@ class YamlReader {
   /// [x, y, z] of finite numbers.
   Vec3 getVec3(const std::string& key) const;
   Vec3 getVec3(const std::string& key, const Vec3& fallback) const;
+  /// getVec3(key) with every coordinate within [-max_abs, max_abs] (`unit` names it in the message).
+  Vec3 getVec3Within(const std::string& key, double max_abs, const std::string& unit) const;
+  /// A fixed orientation [roll, pitch, yaw] (rad), each within +-4 pi (beyond, a typo); zero when absent.
+  Vec3 getRpy(const std::string& key) const;
   /// This node itself as [x, y, z].
   Vec3 asVec3() const;
   /// This node itself as a finite double.
