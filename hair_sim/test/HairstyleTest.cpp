@@ -104,6 +104,27 @@ TEST(HairstyleTest, EmptyStripListIsRejected) {
   EXPECT_NE(m.find("at least 1"), std::string::npos) << m;
 }
 
+TEST(HairstyleTest, AStripGivenTwiceIsRefused) {
+  // kGood's strip again under another name: its points are the first's. (20,000 copies of one strip took
+  // minutes in the springs' neighbour search before this check.)
+  const std::string text = kGood;
+  const std::size_t strip = text.find("  - name: a");
+  ASSERT_NE(strip, std::string::npos);
+  std::string copy = text.substr(strip);
+  copy.replace(copy.find("name: a"), 7, "name: b");
+  const std::string m = test::errorOf([&] { loadHairstyle(test::writeTemp("twice.yaml", text + copy)); });
+  EXPECT_NE(
+      m.find("twice.yaml: strips[1]: its points are those of strips[0] (within 1e-6 m): a strip given twice"),
+      std::string::npos)
+      << m;
+  // Moved 2 um along the hair: another strip, taken.
+  std::string moved = copy;
+  for (const char* z : {"0.15]", "0.2]", "0.25]"})
+    for (std::size_t at = moved.find(z); at != std::string::npos; at = moved.find(z, at + 1))
+      moved.replace(at, std::strlen(z) - 1, std::string(z, std::strlen(z) - 1) + "00002");
+  EXPECT_NO_THROW(loadHairstyle(test::writeTemp("moved.yaml", text + moved))) << moved;
+}
+
 TEST(HairstyleTest, ShippedDefaultHairstyleIsValidAndPaperSized) {
   const SimConfig config = loadSimConfig(test::repoPath("config/hair_sim.yaml"));
   const Hairstyle h = loadHairstyle(config.hairstyle_file);
@@ -129,12 +150,23 @@ TEST(HairstyleTest, ConfigErrorsNameKeyAndValue) {
       {"{name: head,", "{name: '',", "bodies[0].name", "must not be empty"},
       // One publication per substep at most: 1 / 0.004166666666666667 s = 240 Hz.
       {"publish_rate: 30.0", "publish_rate: 250", "publish_rate", "250 Hz"},
+      {"hairstyle: hairstyles/default.yaml", "hairstyle: ''", "hairstyle (line 11)", "got an empty string"},
+      {"center: [0.0, 0.0, 1.13]", "center: [0.0, 1e300, 1.13]", "bodies[2].center",
+       "within +-100000 m, got [0.0, 1e300, 1.13]"},
+      {"center: [-0.01, 0.0, 1.45], rpy: [0.0, 0.0, 0.0]",
+       "center: [-0.01, 0.0, 1.45], rpy: [0.0, 12.6, 0.0]", "bodies[1].rpy",
+       "within +-12.566370614359172 rad (4 pi), got [0.0, 12.6, 0.0]"},
+      {"air_drag: 0.02", "air_drag: 0.02\n  air_drag: 5", "physics.air_drag",
+       "key 'air_drag' given twice (first on line"},
   };
   test::expectEditsNamed(good, cases, [](const std::string& path) { loadSimConfig(path); });
   // Just inside those limits.
   for (const auto& edit : std::vector<std::pair<std::string, std::string>>{
            {"gravity: [0.0, 0.0, -9.81]", "gravity: [600.0, 0.0, -800.0]"},  // exactly 1000 m/s^2
-           {"publish_rate: 30.0", "publish_rate: 240"}}) {
+           {"publish_rate: 30.0", "publish_rate: 240"},
+           {"center: [0.0, 0.0, 1.13]", "center: [0.0, -100000, 1.13]"},
+           {"center: [-0.01, 0.0, 1.45], rpy: [0.0, 0.0, 0.0]",
+            "center: [-0.01, 0.0, 1.45], rpy: [0.0, -12.56, 0.0]"}}) {
     std::string text = good;
     const std::size_t at = text.find(edit.first);
     ASSERT_NE(at, std::string::npos) << edit.first;

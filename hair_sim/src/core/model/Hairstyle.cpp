@@ -1,7 +1,9 @@
 #include "hair_sim/core/model/Hairstyle.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "hair_sim/core/util/YamlReader.hpp"
 
@@ -61,6 +63,29 @@ void Hairstyle::validate(const std::string& source, double root_tolerance) const
                                     formatDouble(root_tolerance) + " m)");
       }
     }
+  }
+  // A strip given twice (a copy and paste): its points would all share cells with the other's, and the
+  // springs' neighbour search scans a cell's points for each of its points (20,000 copies of one strip took
+  // minutes there).
+  std::unordered_map<std::uint64_t, std::size_t> first_root;  // root 0 on a 1 um grid -> strip
+  auto key = [](const Vec3& p) {
+    std::uint64_t k = 0;
+    for (int a = 0; a < 3; ++a) k = k * 1000003u + static_cast<std::uint64_t>(std::llround(p[a] * 1e6));
+    return k;
+  };
+  for (std::size_t i = 0; i < strips.size(); ++i) {
+    const auto known = first_root.emplace(key(strips[i].points[0]), i);
+    if (known.second) continue;
+    const Strip& a = strips[known.first->second];
+    const Strip& b = strips[i];
+    if (a.columns != b.columns || a.rows != b.rows) continue;
+    bool same = true;
+    for (std::size_t p = 0; p < a.points.size() && same; ++p)
+      same = (a.points[p] - b.points[p]).norm() <= 1e-6;
+    if (same)
+      throw std::invalid_argument(source + ": strips[" + std::to_string(i) +
+                                  "]: its points are those of strips[" + std::to_string(known.first->second) +
+                                  "] (within 1e-6 m): a strip given twice");
   }
 }
 

@@ -48,7 +48,7 @@ Hairstyle loadHairstyle(const std::string& path) {
   if (!(center.cwiseAbs().maxCoeff() <= kMaxCoordinate))
     throw scalp.error("center", "every coordinate must be within +-" + formatDouble(kMaxCoordinate) +
                                     " m of the head frame's origin");
-  style.scalp = Ellipsoid::fromRpy(center, scalp.getVec3("rpy", Vec3::Zero()), radii);
+  style.scalp = Ellipsoid::fromRpy(center, scalp.getRpy("rpy"), radii);
 
   const YamlReader strips = root.child("strips");
   strips.requireSequence(1);

@@ -37,7 +37,9 @@ SimConfig loadSimConfig(const std::string& path) {
   if (c.head_frame == c.world_frame)
     throw y.error("head_frame", "must differ from world_frame '" + c.world_frame + "'");
   c.publish_rate = y.getDouble("publish_rate", 0.1, 1000.0, c.publish_rate);
-  c.hairstyle_file = resolveRelativeTo(path, y.getString("hairstyle"));
+  const std::string hairstyle = y.getString("hairstyle");
+  if (hairstyle.empty()) throw y.error("hairstyle", "must name a hairstyle file, got an empty string");
+  c.hairstyle_file = resolveRelativeTo(path, hairstyle);
   if (y.has("physics")) {
     const YamlReader p = y.child("physics");
     p.requireKeys({"substep", "gravity", "linear_density", "hinge_stiffness", "hinge_damping", "air_drag",
@@ -94,7 +96,10 @@ SimConfig loadSimConfig(const std::string& path) {
       for (int k = 0; k < 3; ++k)
         if (!(radii[k] > 0.0 && radii[k] <= 10.0))
           throw b.error("radii", "radius " + formatDouble(radii[k]) + " m must be in (0, 10]");
-      body.shape = Ellipsoid::fromRpy(b.getVec3("center"), b.getVec3("rpy", Vec3::Zero()), radii);
+      // Far beyond any room or map, and turns beyond 4 pi, are typos (a center of 1e300 m made the step 12 x
+      // slower).
+      const Vec3 center = b.getVec3Within("center", 1e5, "m"), rpy = b.getRpy("rpy");
+      body.shape = Ellipsoid::fromRpy(center, rpy, radii);
       c.bodies.push_back(body);
     }
   }
