@@ -40,6 +40,10 @@ expect_refused() {
   fi
 }
 expect_refused "no config_file" "parameter ~config_file" 
+# A relative path, as `config:=hair_sim.yaml` gives it: roslaunch reads it from the shell's directory, the node
+# from its own (it names its working directory and asks for an absolute path).
+expect_refused "relative config_file" "parameter ~config_file: 'hair_sim.yaml' is a relative path, and there is no such file in the node's working directory" \
+  _config_file:=hair_sim.yaml
 expect_refused "publish_rate of the wrong type" "parameter ~publish_rate: 'fast' must be a number" \
   _config_file:="$CONFIG" _publish_rate:=fast
 expect_refused "negative publish_rate" "parameter ~publish_rate: '-1' must be in (0, 1/substep] Hz" \
@@ -67,6 +71,15 @@ sed 's/^  hinge_stiffness: .*/  hinge_stiffness: -3.0/' "$CONFIG" >"$TMP/negativ
 grep -q "hinge_stiffness: -3.0" "$TMP/negative.yaml" || { echo "FAIL: could not write negative.yaml"; exit 1; }
 expect_refused "negative hinge_stiffness in the config file" "hinge_stiffness" _config_file:="$TMP/negative.yaml"
 grep -n "hinge_stiffness: -3.0" "$TMP/negative.yaml" | head -1
+# static_frame.py (avatar.launch's base frame): the same for its parameters.
+FRAME=$DEVEL/lib/hair_sim/static_frame.py
+NODE=$FRAME expect_refused "static_frame.py without child" "parameter ~child is required"
+NODE=$FRAME expect_refused "static_frame.py x not a number" "parameter ~x: 'abc' must be a finite number" \
+  _child:=base _x:=abc
+NODE=$FRAME expect_refused "static_frame.py yaw nan" "parameter ~yaw: nan must be a finite number" \
+  _child:=base _yaw:=.nan
+NODE=$FRAME expect_refused "static_frame.py child = parent" "are both 'world': a frame cannot be its own parent" \
+  _child:=world
 # A good start for comparison: the node runs until timeout stops it (status 124).
 status=0
 timeout 3 "$NODE" __name:=hair_sim_good _config_file:="$CONFIG" _publish_rate:=30 >"$TMP/good.log" 2>&1 || status=$?

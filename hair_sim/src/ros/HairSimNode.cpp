@@ -9,8 +9,10 @@
 #include <boost/make_shared.hpp>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
+#include <system_error>
 #include <type_traits>
 
 #include "hair_sim/core/model/HairstyleIO.hpp"
@@ -109,6 +111,15 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(n
 void HairSimNode::readParameters() {
   if (!readParam(pnh_, "config_file", config_file_) || config_file_.empty())
     throw badParam("config_file", config_file_, "is required: the path of config/hair_sim.yaml");
+  std::error_code no_file;
+  if (config_file_.front() != '/' && !std::filesystem::exists(config_file_, no_file)) {
+    // roslaunch reads a relative path from the shell's directory, the node from its own (ROS_HOME).
+    throw badParam("config_file", config_file_,
+                   "is a relative path, and there is no such file in the node's working directory " +
+                       std::filesystem::current_path(no_file).string() +
+                       " (roslaunch runs nodes in ROS_HOME): give an absolute path, e.g. config:=$(pwd)/" +
+                       config_file_);
+  }
   config_ = loadSimConfig(config_file_);  // names file, key, line and value on error
   const std::string file_world_frame = config_.world_frame, file_head_frame = config_.head_frame;
   // Individual parameters override the file (launch file arguments).
