@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
         [&](const hair_sim::OutputFrame& frame) {
           progress.update(frame.t);
           if (bag) bag->write(frame, runner.bodyFrames(frame.head_pose));
-          if (frame.meshes) {
+          if (!mesh_dir.empty()) {  // (--bag alone builds meshes too, but writes no PLY)
             char name[32];
             std::snprintf(name, sizeof(name), "/frame_%05ld.ply", frame_number);
             hair_sim::PlyWriter::write(mesh_dir + name, frame.meshes->meshes(), frame.meshes->colours());
