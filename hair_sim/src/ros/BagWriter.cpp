@@ -4,6 +4,8 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include <boost/make_shared.hpp>
+#include <cerrno>
+#include <cstring>
 #include <stdexcept>
 
 namespace hair_sim {
@@ -24,40 +26,76 @@ boost::shared_ptr<ros::M_string> latchedHeader() {
 
 }  // namespace
 
-BagWriter::BagWriter(const std::string& path, const SimConfig& config, RenderMode mode, int strands_per_strip)
-    : path_(path), config_(config), mode_(mode), strands_per_strip_(strands_per_strip) {
+template <typename Action>
+void BagWriter::guarded(const char* what, Action action) {
+  if (!bag_) throw std::logic_error(path_ + ": the bag was abandoned after an earlier error");
+  errno = 0;
   try {
-    bag_.open(path, rosbag::bagmode::Write);
-    bag_.setCompression(rosbag::compression::LZ4);
+    action();
   } catch (const rosbag::BagException& e) {
-    throw std::runtime_error(path + ": cannot write the bag: " + e.what());
+    const int err = errno;  // rosbag's messages give byte counts, not the reason
+    abandon();
+    throw std::runtime_error(path_ + ": " + what + ": " + e.what() +
+                             (err != 0 ? std::string(" (") + std::strerror(err) + ")" : std::string()));
   }
 }
+
+void BagWriter::abandon() noexcept {
+  if (!bag_) return;
+  try {
+    bag_->close();
+    bag_.reset();
+  } catch (...) {
+    // close() failed half way (e.g. writing the index on a full disk): the bag stays "open" and
+    // ~Bag() would call close() again, which throws from a destructor (std::terminate). Drop the
+    // handle instead; its memory and file descriptor are released at exit.
+    static_cast<void>(bag_.release());
+  }
+}
+
+BagWriter::BagWriter(const std::string& path, const SimConfig& config, RenderMode mode, int strands_per_strip)
+    : bag_(std::make_unique<rosbag::Bag>()),
+      path_(path),
+      config_(config),
+      mode_(mode),
+      strands_per_strip_(strands_per_strip) {
+  guarded("cannot write the bag", [this] {
+    bag_->open(path_, rosbag::bagmode::Write);
+    bag_->setCompression(rosbag::compression::LZ4);
+  });
+}
+
+BagWriter::~BagWriter() { abandon(); }
 
 void BagWriter::write(const OutputFrame& frame, const std::vector<Iso3>& body_frames) {
   if (!frame.meshes) throw std::logic_error("BagWriter::write(...) : the frame has no meshes");
   const ros::Time stamp(kStart + frame.t);
   tf2_msgs::TFMessage tf;
   tf.transforms.push_back(makeTransform(frame.head_pose, config_.world_frame, config_.head_frame, stamp));
-  bag_.write("/tf", stamp, tf);
-  bag_.write("/hair_state", stamp,
-             makeHairState(*frame.simulator, *frame.points_world, config_.world_frame, stamp));
-  bag_.write("/hair_markers", stamp,
-             makeHairMarkers(*frame.meshes, mode_, strands_per_strip_, config_.world_frame, stamp));
+  const auto state = makeHairState(*frame.simulator, *frame.points_world, config_.world_frame, stamp);
+  const auto markers = makeHairMarkers(*frame.meshes, mode_, strands_per_strip_, config_.world_frame, stamp);
+  guarded("cannot write the bag", [&] {
+    bag_->write("/tf", stamp, tf);
+    bag_->write("/hair_state", stamp, state);
+    bag_->write("/hair_markers", stamp, markers);
+  });
   messages_ += 3;
   bool moved = written_body_frames_.size() != body_frames.size();
   for (std::size_t b = 0; !moved && b < body_frames.size(); ++b)
     moved = (body_frames[b].matrix() - written_body_frames_[b].matrix()).cwiseAbs().maxCoeff() > 1e-6;
   if (moved) {
     static const auto header = latchedHeader<visualization_msgs::MarkerArray>();
-    bag_.write("/collision_bodies", stamp,
-               makeBodyMarkers(config_.bodies, body_frames, config_.head_frame, config_.world_frame, stamp),
-               header);
+    const auto bodies =
+        makeBodyMarkers(config_.bodies, body_frames, config_.head_frame, config_.world_frame, stamp);
+    guarded("cannot write the bag", [&] { bag_->write("/collision_bodies", stamp, bodies, header); });
     written_body_frames_ = body_frames;
     ++messages_;
   }
 }
 
-void BagWriter::close() { bag_.close(); }
+void BagWriter::close() {
+  if (!bag_) return;  // abandoned: the error was reported when it happened
+  guarded("cannot finish the bag (index and header)", [this] { bag_->close(); });
+}
 
 }  // namespace hair_sim
