@@ -1,10 +1,11 @@
 #include "hair_sim/core/geometry/PlyWriter.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <stdexcept>
 
@@ -120,14 +121,17 @@ void PlyWriter::write(const std::string& path, const std::vector<StripMesh>& mes
     first += 2 * count;
   }
 
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  std::FILE* file = std::fopen(path.c_str(), "wb");
   if (!file) {
-    throw std::runtime_error(std::string(where) + "cannot open '" + path + "' for writing");
+    throw std::runtime_error(std::string(where) + "cannot open '" + path +
+                             "' for writing: " + std::strerror(errno));
   }
-  file.write(data.data(), static_cast<std::streamsize>(data.size()));
-  file.close();
-  if (!file) {
-    throw std::runtime_error(std::string(where) + "failed writing '" + path + "'");
+  const bool written = std::fwrite(data.data(), 1, data.size(), file) == data.size();
+  const int write_error = errno;
+  const bool closed = std::fclose(file) == 0;
+  if (!written || !closed) {
+    throw std::runtime_error(std::string(where) + "failed writing '" + path +
+                             "': " + std::strerror(!written ? write_error : errno));
   }
 }
 

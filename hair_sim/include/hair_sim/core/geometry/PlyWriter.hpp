@@ -19,8 +19,8 @@ namespace hair_sim {
 class PlyWriter {
  public:
   /// colours: empty (all vertices white, opaque) or one vector per mesh with one Rgba per vertex.
-  /// Throws std::invalid_argument on inconsistent sizes and std::runtime_error naming the path when the file
-  /// cannot be opened or written.
+  /// Throws std::invalid_argument on inconsistent sizes and std::runtime_error naming the path and the reason
+  /// (strerror) when the file cannot be opened or written (a partly written file is left in place).
   static void write(const std::string& path, const std::vector<StripMesh>& meshes,
                     const std::vector<std::vector<Rgba>>& colours);
 
