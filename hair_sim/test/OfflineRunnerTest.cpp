@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -186,12 +188,20 @@ TEST(OfflineRunnerTest, CommandWritesCsvPosesAndJsonSummary) {
   while (std::getline(poses, line)) pose_lines.push_back(line);
   ASSERT_EQ(pose_lines.size(), 11u);
   EXPECT_EQ(pose_lines.back().substr(0, 22), "0.500000,0,0.1,1.6,0,0");
+  // The summary line names every output written.
+  EXPECT_NE(c.out.find("frames written to " + pts_path + ", " + poses_path + "\n"), std::string::npos)
+      << c.out;
 }
 
 TEST(OfflineRunnerTest, CommandReportsBadInputAndUsage) {
   Command c = shell(kBin + " --help");
   EXPECT_EQ(c.status, 0);
   EXPECT_NE(c.out.find("--scenario"), std::string::npos);
+  const std::string synopsis = c.out.substr(0, c.out.find("\n\n"));  // every flag in the synopsis
+  for (const char* flag :
+       {"--config", "--scenario", "--out", "--poses-out", "--mesh-out", "--bag", "--samples-across",
+        "--samples-along", "--max-triangles", "--teleport-distance", "--teleport-angle"})
+    EXPECT_NE(synopsis.find(flag), std::string::npos) << flag << " in " << synopsis;
   c = shell(kBin + " --config x.yaml");
   EXPECT_EQ(c.status, 2);
   EXPECT_NE(c.out.find("--scenario is required"), std::string::npos) << c.out;
@@ -206,6 +216,117 @@ TEST(OfflineRunnerTest, CommandReportsBadInputAndUsage) {
   c = shell(kBin + " --config /nonexistent.yaml --scenario " + bad + " --out /dev/null");
   EXPECT_EQ(c.status, 1);
   EXPECT_NE(c.out.find("/nonexistent.yaml"), std::string::npos) << c.out;
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+bool exists(const std::string& path) {
+  struct stat st {};
+  return stat(path.c_str(), &st) == 0;
+}
+
+/// A short scenario (duration s at 30 Hz, the head still).
+std::string shortScenario(const std::string& name, double duration) {
+  return test::writeTemp(name,
+                         "duration: " + std::to_string(duration) +
+                             "\noutput_rate: 30\nhead:\n  - {t: 0, position: [0, 0, 1.6], rpy: [0, 0, 0]}\n");
+}
+
+const std::string kConfigArg = " --config " + test::repoPath("config/hair_sim.yaml");
+
+TEST(OfflineRunnerTest, CommandReportsAFailedBagWriteWithoutAborting) {
+  // A full disk: rosbag throws from Bag::~Bag() while the first error unwinds (std::terminate before).
+  const std::string scenario = shortScenario("bag_full.yaml", 0.1);
+  Command c = shell(kBin + kConfigArg + " --scenario " + scenario + " --bag /dev/full");
+  EXPECT_EQ(c.status, 1) << c.out;
+  EXPECT_NE(c.out.find("hair_sim_offline: error: /dev/full: cannot write the bag: "), std::string::npos)
+      << c.out;
+  EXPECT_NE(c.out.find("No space left on device"), std::string::npos) << c.out;
+  EXPECT_EQ(c.out.find("terminate"), std::string::npos) << c.out;
+  // A file size limit reached mid-run: the same error, and the incomplete bag is removed.
+  const std::string bag = test::tempPath("limited.bag");
+  c = shell("trap '' XFSZ; ulimit -f 200; exec " + kBin + kConfigArg + " --scenario " +
+            shortScenario("bag_limit.yaml", 0.5) + " --bag " + bag);
+  EXPECT_EQ(c.status, 1) << c.out;
+  EXPECT_NE(c.out.find("error: " + bag + ": cannot write the bag: "), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find("File too large"), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find("removed the incomplete " + bag), std::string::npos) << c.out;
+  EXPECT_FALSE(exists(bag));
+}
+
+TEST(OfflineRunnerTest, CommandStopsAtTheFirstFailedCsvWriteAndRemovesTheFiles) {
+  const std::string csv = test::tempPath("limited.csv"), poses = test::tempPath("limited_poses.csv");
+  // 10 s of frames (about 16 MB of CSV) against a 100 kB limit: the first frame fails.
+  const Command c = shell("trap '' XFSZ; ulimit -f 100; exec " + kBin + kConfigArg + " --scenario " +
+                          shortScenario("csv_limit.yaml", 10.0) + " --out " + csv + " --poses-out " + poses);
+  EXPECT_EQ(c.status, 1) << c.out;
+  EXPECT_NE(c.out.find("hair_sim_offline: error: " + csv + ": cannot write: File too large"),
+            std::string::npos)
+      << c.out;
+  EXPECT_EQ(c.out.find("\"steps\""), std::string::npos) << c.out;  // no summary: the run stopped
+  EXPECT_FALSE(exists(csv));
+  EXPECT_FALSE(exists(poses));
+}
+
+TEST(OfflineRunnerTest, CommandRefusedRunLeavesTheOutputsUntouched) {
+  const std::string csv = test::writeTemp("refused.csv", "old\n"),
+                    poses = test::tempPath("refused_poses.csv");
+  const std::string bag = test::tempPath("refused.bag"), mesh = test::tempPath("refused_mesh");
+  const std::string outputs =
+      " --out " + csv + " --poses-out " + poses + " --bag " + bag + " --mesh-out " + mesh;
+  const std::string scenario = shortScenario("refused.yaml", 0.1);
+  auto untouched = [&] {
+    EXPECT_EQ(readFile(csv), "old\n");
+    EXPECT_FALSE(exists(poses));
+    EXPECT_FALSE(exists(bag));
+    EXPECT_FALSE(exists(mesh));
+  };
+  // A body in a frame the offline runner does not know: named by file, key and line.
+  std::string text = readFile(test::repoPath("config/hair_sim.yaml"));
+  const std::string hairstyle_key = "hairstyle: hairstyles/default.yaml", neck = "{name: neck, frame: world";
+  ASSERT_NE(text.find(hairstyle_key), std::string::npos);
+  ASSERT_NE(text.find(neck), std::string::npos);
+  text.replace(text.find(hairstyle_key), hairstyle_key.size(),
+               "hairstyle: " + test::repoPath("config/hairstyles/default.yaml"));
+  text.replace(text.find(neck), neck.size(), "{name: neck, frame: neck");
+  const std::string config = test::writeTemp("body_frame.yaml", text);
+  Command c = shell(kBin + " --config " + config + " --scenario " + scenario + outputs);
+  EXPECT_EQ(c.status, 1) << c.out;
+  EXPECT_NE(c.out.find("error: " + config + ": bodies[1].frame (line "), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find("body 'neck' is in frame 'neck'"), std::string::npos) << c.out;
+  untouched();
+  // A triangle budget below the coarsest level of detail: a bad flag, exit 2.
+  c = shell(kBin + kConfigArg + " --scenario " + scenario + outputs + " --max-triangles 100");
+  EXPECT_EQ(c.status, 2) << c.out;
+  EXPECT_NE(c.out.find("hair_sim_offline: --max-triangles: 100 is below the "), std::string::npos) << c.out;
+  untouched();
+  // One file given to two outputs: exit 2 (it was written interleaved before).
+  c = shell(kBin + kConfigArg + " --scenario " + scenario + " --out " + csv + " --poses-out " + csv);
+  EXPECT_EQ(c.status, 2) << c.out;
+  EXPECT_NE(c.out.find("are the same file"), std::string::npos) << c.out;
+  untouched();
+  // An output that cannot be written is found before the others are opened.
+  c = shell(kBin + kConfigArg + " --scenario " + scenario + " --out " + csv +
+            " --bag /nonexistent_hair_sim/x.bag");
+  EXPECT_EQ(c.status, 1) << c.out;
+  EXPECT_NE(c.out.find("/nonexistent_hair_sim/x.bag: cannot open for writing: No such file or directory"),
+            std::string::npos)
+      << c.out;
+  untouched();
+}
+
+TEST(OfflineRunnerTest, CommandWarnsWhenNoSubstepIsSimulated) {
+  const std::string scenario = test::writeTemp(
+      "no_step.yaml",
+      "duration: 1\noutput_rate: 0.1\nhead:\n  - {t: 0, position: [0, 0, 1.6], rpy: [0, 0, 0]}\n");
+  const Command c = shell(kBin + kConfigArg + " --scenario " + scenario + " --out /dev/null");
+  EXPECT_EQ(c.status, 0) << c.out;
+  EXPECT_NE(c.out.find("hair_sim_offline: warning: no substep was simulated"), std::string::npos) << c.out;
 }
 
 }  // namespace

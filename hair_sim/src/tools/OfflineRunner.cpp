@@ -32,11 +32,21 @@ OfflineRunner::OfflineRunner(SimConfig config, Hairstyle hairstyle, Scenario sce
       scenario_(std::move(scenario)),
       events_(scenario_.schedule()),
       simulator_(std::move(hairstyle), config_.physics, config_.bodies) {
-  for (const Body& b : config_.bodies)
-    if (b.frame != config_.head_frame && b.frame != config_.world_frame)
-      throw std::invalid_argument("bodies: body '" + b.name + "' is in frame '" + b.frame +
-                                  "': the offline runner knows only head_frame '" + config_.head_frame +
-                                  "' and world_frame '" + config_.world_frame + "'");
+  const int b = bodyInUnknownFrame(config_);
+  if (b >= 0) {
+    const Body& body = config_.bodies[static_cast<std::size_t>(b)];
+    throw std::invalid_argument("bodies[" + std::to_string(b) + "].frame: body '" + body.name +
+                                "' is in frame '" + body.frame +
+                                "': the offline runner knows only head_frame '" + config_.head_frame +
+                                "' and world_frame '" + config_.world_frame + "'");
+  }
+}
+
+int OfflineRunner::bodyInUnknownFrame(const SimConfig& config) {
+  for (std::size_t b = 0; b < config.bodies.size(); ++b)
+    if (config.bodies[b].frame != config.head_frame && config.bodies[b].frame != config.world_frame)
+      return static_cast<int>(b);
+  return -1;
 }
 
 Iso3 OfflineRunner::headPose(double t, const EventSample& events) const {

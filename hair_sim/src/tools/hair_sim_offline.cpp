@@ -11,11 +11,17 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <sys/stat.h>
+#include <climits>
+#include <cstdlib>
 
 #include "hair_sim/core/geometry/PlyWriter.hpp"
+#include "hair_sim/core/geometry/Tessellator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
+#include "hair_sim/core/util/YamlReader.hpp"
 #include "hair_sim/ros/BagWriter.hpp"
 #include "hair_sim/tools/OfflineRunner.hpp"
 
@@ -25,6 +31,7 @@ const char* kUsage =
     "Usage: hair_sim_offline --config FILE --scenario FILE [--out FILE.csv] [--poses-out FILE.csv]\n"
     "                        [--mesh-out DIR] [--bag FILE.bag]\n"
     "                        [--samples-across N --samples-along N | --max-triangles N]\n"
+    "                        [--teleport-distance M] [--teleport-angle RAD]\n"
     "\n"
     "Runs the hair simulation core (no ROS master needed) on a scenario and writes every control\n"
     "point of every output frame (--out), or bakes the run into a rosbag (--bag), or both.\n"
@@ -51,8 +58,9 @@ const char* kUsage =
     "\n"
     "A progress bar goes to stderr when it is a terminal and the run takes more than a second.\n"
     "The last line on stdout is a JSON summary (steps, control_points, sim_seconds, wall_seconds,\n"
-    "ns_per_control_point_update, ...). Exit status 0 on success, 1 on a bad file or value, 2 on\n"
-    "bad usage.\n";
+    "ns_per_control_point_update, ...). Exit status 0 on success, 1 on a bad file or value, a failed\n"
+    "write or a non-finite result, 2 on bad usage. Every input is checked before any output is opened;\n"
+    "when writing fails mid-run, the incomplete output files of the run are removed.\n";
 
 /// A progress bar on stderr: only when stderr is a terminal, and only once the run has taken a
 /// second (short runs stay quiet); redrawn at most ten times a second.
@@ -88,6 +96,92 @@ int usageError(const std::string& message) {
   std::cerr << "hair_sim_offline: " << message << "\n\n" << kUsage;
   return 2;
 }
+
+std::string parentFolder(const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  if (slash == std::string::npos) return ".";
+  return slash == 0 ? "/" : path.substr(0, slash);
+}
+
+std::string withoutTrailingSlashes(std::string path) {
+  while (path.size() > 1 && path.back() == '/') path.pop_back();
+  return path;
+}
+
+/// What identifies an output path, for refusing one file given to two outputs: the canonical path of
+/// the file, or of its folder plus its name when it does not exist yet. Empty for existing special files
+/// (/dev/null may well take several outputs).
+std::string outputIdentity(const std::string& given) {
+  const std::string path = withoutTrailingSlashes(given);
+  struct stat st {};
+  if (stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) return "";
+  char resolved[PATH_MAX];
+  if (realpath(path.c_str(), resolved)) return resolved;
+  const std::string folder = parentFolder(path);
+  const std::string name = path.substr(path.rfind('/') == std::string::npos ? 0 : path.rfind('/') + 1);
+  return (realpath(folder.c_str(), resolved) ? std::string(resolved) : folder) + "/" + name;
+}
+
+/// Why the file `path` cannot be created or overwritten ("" if it can). Checked before any output is
+/// opened so that a run refused for one output truncates none of the others.
+std::string cannotWriteFile(const std::string& path) {
+  struct stat st {};
+  if (stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) return std::strerror(EISDIR);
+    return access(path.c_str(), W_OK) == 0 ? "" : std::strerror(errno);
+  }
+  if (errno != ENOENT) return std::strerror(errno);
+  return access(parentFolder(path).c_str(), W_OK | X_OK) == 0 ? "" : std::strerror(errno);
+}
+
+/// The same for a folder that is used or created.
+std::string cannotWriteFolder(const std::string& given) {
+  const std::string dir = withoutTrailingSlashes(given);
+  struct stat st {};
+  if (stat(dir.c_str(), &st) == 0) {
+    if (!S_ISDIR(st.st_mode)) return std::strerror(ENOTDIR);
+    return access(dir.c_str(), W_OK | X_OK) == 0 ? "" : std::strerror(errno);
+  }
+  if (errno != ENOENT) return std::strerror(errno);
+  return access(parentFolder(dir).c_str(), W_OK | X_OK) == 0 ? "" : std::strerror(errno);
+}
+
+/// A failed write: names the file and the reason (errno of the failed call).
+[[noreturn]] void writeFailed(const std::string& path) {
+  const int err = errno != 0 ? errno : EIO;
+  throw std::runtime_error(path + ": cannot write: " + std::strerror(err));
+}
+
+/// The files a run created or truncated, removed when the run fails half way so that no incomplete
+/// output is left looking like a result. Special files (/dev/null, FIFOs) are not registered.
+class PartialOutputs {
+ public:
+  void addFile(const std::string& path) {
+    struct stat st {};
+    if (stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode)) files_.push_back(path);
+  }
+  void addPly(const std::string& path) { plys_.push_back(path); }
+  void setCreatedFolder(const std::string& dir) { created_folder_ = dir; }
+  void removeAll() {
+    for (const std::string& f : files_)
+      if (std::remove(f.c_str()) == 0) std::cerr << "hair_sim_offline: removed the incomplete " << f << "\n";
+    int removed = 0;
+    for (const std::string& f : plys_) removed += std::remove(f.c_str()) == 0 ? 1 : 0;
+    if (removed > 0)
+      std::cerr << "hair_sim_offline: removed the " << removed << " PLY files of this run from "
+                << parentFolder(plys_.front()) << "\n";
+    if (!created_folder_.empty() && rmdir(created_folder_.c_str()) == 0)
+      std::cerr << "hair_sim_offline: removed the folder " << created_folder_ << "\n";
+    files_.clear();
+    plys_.clear();
+    created_folder_.clear();
+  }
+
+ private:
+  std::vector<std::string> files_;
+  std::vector<std::string> plys_;
+  std::string created_folder_;
+};
 
 }  // namespace
 
@@ -174,29 +268,89 @@ int main(int argc, char** argv) {
   if (!teleport_angle.empty() && !positiveReal(teleport_angle, options.teleport_angle))
     return usageError("--teleport-angle: '" + teleport_angle + "' is not a number > 0 (rad)");
   options.build_meshes = !mesh_dir.empty() || !bag_path.empty();
+  {
+    const std::pair<const char*, const std::string*> outputs[] = {
+        {"--out", &out_path}, {"--poses-out", &poses_path}, {"--bag", &bag_path}, {"--mesh-out", &mesh_dir}};
+    for (std::size_t i = 0; i < 4; ++i)
+      for (std::size_t j = i + 1; j < 4; ++j) {
+        if (outputs[i].second->empty() || outputs[j].second->empty()) continue;
+        const std::string id = outputIdentity(*outputs[i].second);
+        if (!id.empty() && id == outputIdentity(*outputs[j].second))
+          return usageError(std::string(outputs[i].first) + " '" + *outputs[i].second + "' and " +
+                            outputs[j].first + " '" + *outputs[j].second + "' are the same file");
+      }
+  }
 
+  // Everything that can refuse the run is checked before the first output is opened: a refused run
+  // creates, truncates and removes nothing.
+  std::FILE* out = nullptr;
+  std::FILE* poses = nullptr;
+  std::unique_ptr<hair_sim::BagWriter> bag;
+  PartialOutputs partial;
+  auto closeQuietly = [&] {
+    if (out) std::fclose(out);
+    if (poses) std::fclose(poses);
+    out = poses = nullptr;
+    bag.reset();  // closes the bag if it can, never throws
+  };
   try {
     hair_sim::SimConfig config = hair_sim::loadSimConfig(config_path);
     hair_sim::Hairstyle style = hair_sim::loadHairstyle(config.hairstyle_file);
     hair_sim::Scenario scenario = hair_sim::Scenario::load(scenario_path);
+    const int unknown_frame = hair_sim::OfflineRunner::bodyInUnknownFrame(config);
+    if (unknown_frame >= 0) {
+      const hair_sim::Body& b = config.bodies[static_cast<std::size_t>(unknown_frame)];
+      throw hair_sim::YamlReader::loadFile(config_path)
+          .child("bodies")
+          .at(static_cast<std::size_t>(unknown_frame))
+          .error("frame", "body '" + b.name + "' is in frame '" + b.frame +
+                              "': the offline runner knows only head_frame '" + config.head_frame +
+                              "' and world_frame '" + config.world_frame + "'");
+    }
+    if (options.mesh.max_triangles > 0) {
+      std::vector<hair_sim::StripShape> shapes;
+      for (const hair_sim::Strip& s : style.strips) shapes.push_back(hair_sim::StripShape{s.columns, s.rows});
+      const std::int64_t minimum =
+          hair_sim::Tessellator::triangleCount(shapes, hair_sim::Tessellator::ladderLevel(0));
+      if (options.mesh.max_triangles < minimum)
+        return usageError("--max-triangles: " + max_triangles + " is below the " + std::to_string(minimum) +
+                          " triangles of the coarsest level of detail (1 x 1 samples per span) of " +
+                          config.hairstyle_file);
+    }
+    hair_sim::OfflineRunner runner(config, std::move(style), scenario);
+    for (const std::string* path : {&out_path, &poses_path, &bag_path}) {
+      if (path->empty()) continue;
+      const std::string why = cannotWriteFile(*path);
+      if (!why.empty()) throw std::runtime_error(*path + ": cannot open for writing: " + why);
+    }
+    if (!mesh_dir.empty()) {
+      const std::string why = cannotWriteFolder(mesh_dir);
+      if (!why.empty())
+        throw std::runtime_error(mesh_dir + ": cannot write PLY files into the folder: " + why);
+    }
 
-    std::FILE* out = nullptr;
     if (!out_path.empty()) {
       out = std::fopen(out_path.c_str(), "w");
       if (!out) throw std::runtime_error(out_path + ": cannot open for writing: " + std::strerror(errno));
-      std::fputs("t,strip,column,row,x,y,z\n", out);
+      partial.addFile(out_path);
+      if (std::fputs("t,strip,column,row,x,y,z\n", out) < 0) writeFailed(out_path);
     }
-    std::FILE* poses = nullptr;
     if (!poses_path.empty()) {
       poses = std::fopen(poses_path.c_str(), "w");
       if (!poses) throw std::runtime_error(poses_path + ": cannot open for writing: " + std::strerror(errno));
-      std::fputs("t,x,y,z,qx,qy,qz,qw\n", poses);
+      partial.addFile(poses_path);
+      if (std::fputs("t,x,y,z,qx,qy,qz,qw\n", poses) < 0) writeFailed(poses_path);
     }
-    if (!mesh_dir.empty() && mkdir(mesh_dir.c_str(), 0755) != 0 && errno != EEXIST)
-      throw std::runtime_error(mesh_dir + ": cannot create the folder: " + std::strerror(errno));
-    hair_sim::OfflineRunner runner(config, std::move(style), scenario);
-    std::unique_ptr<hair_sim::BagWriter> bag;
-    if (!bag_path.empty()) bag = std::make_unique<hair_sim::BagWriter>(bag_path, config);
+    if (!mesh_dir.empty()) {
+      if (mkdir(mesh_dir.c_str(), 0755) == 0)
+        partial.setCreatedFolder(mesh_dir);
+      else if (errno != EEXIST)
+        throw std::runtime_error(mesh_dir + ": cannot create the folder: " + std::strerror(errno));
+    }
+    if (!bag_path.empty()) {
+      bag = std::make_unique<hair_sim::BagWriter>(bag_path, config);
+      partial.addFile(bag_path);
+    }
     Progress progress(scenario.duration);
     long frame_number = 0;
     const hair_sim::RunSummary summary = runner.run(
@@ -206,6 +360,7 @@ int main(int argc, char** argv) {
           if (!mesh_dir.empty()) {  // (--bag alone builds meshes too, but writes no PLY)
             char name[32];
             std::snprintf(name, sizeof(name), "/frame_%05ld.ply", frame_number);
+            partial.addPly(mesh_dir + name);
             hair_sim::PlyWriter::write(mesh_dir + name, frame.meshes->meshes(), frame.meshes->colours());
           }
           ++frame_number;
@@ -216,34 +371,56 @@ int main(int argc, char** argv) {
               for (int c = 0; c < strips[s].columns; ++c) {
                 const hair_sim::Vec3& p =
                     (*frame.points_world)[static_cast<std::size_t>(offsets[s] + strips[s].index(r, c))];
-                std::fprintf(out, "%.6f,%zu,%d,%d,%.9g,%.9g,%.9g\n", frame.t, s, c, r, p.x(), p.y(), p.z());
+                if (std::fprintf(out, "%.6f,%zu,%d,%d,%.9g,%.9g,%.9g\n", frame.t, s, c, r, p.x(), p.y(),
+                                 p.z()) < 0)
+                  writeFailed(out_path);
               }
           }
+          if (out && std::fflush(out) != 0) writeFailed(out_path);
           if (poses) {
             const Eigen::Quaterniond q(frame.head_pose.linear());
             const hair_sim::Vec3 p = frame.head_pose.translation();
-            std::fprintf(poses, "%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", frame.t, p.x(), p.y(), p.z(),
-                         q.x(), q.y(), q.z(), q.w());
+            if (std::fprintf(poses, "%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", frame.t, p.x(), p.y(), p.z(),
+                             q.x(), q.y(), q.z(), q.w()) < 0 ||
+                std::fflush(poses) != 0)
+              writeFailed(poses_path);
           }
         },
         options);
     progress.finish();
-    const bool write_ok = (!out || std::fclose(out) == 0) && (!poses || std::fclose(poses) == 0);
-    if (!write_ok) throw std::runtime_error("error while writing the output files");
-    std::string written;
-    for (const std::string& p : {out_path, bag_path, mesh_dir})
-      if (!p.empty()) written += (written.empty() ? "" : ", ") + p;
+    for (std::pair<std::FILE**, const std::string*> f :
+         {std::make_pair(&out, &out_path), std::make_pair(&poses, &poses_path)}) {
+      if (!*f.first) continue;
+      const int closed = std::fclose(*f.first);
+      *f.first = nullptr;
+      if (closed != 0) writeFailed(*f.second);
+    }
+    long bag_messages = 0;
     if (bag) {
       bag->close();
-      written += " (" + std::to_string(bag->messagesWritten()) + " messages in the bag)";
+      bag_messages = bag->messagesWritten();
+      bag.reset();
     }
+    std::string written;
+    for (const std::string& p : {out_path, poses_path, bag_path, mesh_dir})
+      if (!p.empty()) written += (written.empty() ? "" : ", ") + p;
+    if (!bag_path.empty()) written += " (" + std::to_string(bag_messages) + " messages in the bag)";
     std::cerr << "hair_sim_offline: " << summary.strips << " strips, " << summary.control_points
               << " control points, " << summary.steps << " substeps, " << summary.output_frames
               << " frames written to " << written << "\n";
+    if (summary.steps == 0)
+      std::cerr << "hair_sim_offline: warning: no substep was simulated: with duration "
+                << hair_sim::formatDouble(scenario.duration) << " s and output_rate "
+                << hair_sim::formatDouble(scenario.output_rate) << " Hz the last output frame is at t = "
+                << hair_sim::formatDouble((summary.output_frames - 1) / scenario.output_rate)
+                << " s, before the first substep (" << hair_sim::formatDouble(config.physics.substep)
+                << " s): the outputs hold the initial state only\n";
     std::cout << summary.toJson() << std::endl;
     return summary.all_finite ? 0 : 1;
   } catch (const std::exception& e) {
+    closeQuietly();
     std::cerr << "hair_sim_offline: error: " << e.what() << "\n";
+    partial.removeAll();
     return 1;
   }
 }

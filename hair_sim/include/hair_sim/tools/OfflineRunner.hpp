@@ -57,8 +57,11 @@ struct RunOptions {
 
 class OfflineRunner {
  public:
-  /// Throws std::invalid_argument if a body's frame is neither the config's head_frame nor its world_frame.
+  /// Throws std::invalid_argument if a body's frame is neither the config's head_frame nor its world_frame
+  /// (the message starts with the key, "bodies[1].frame: ...": the config's file is not known here).
   OfflineRunner(SimConfig config, Hairstyle hairstyle, Scenario scenario);
+  /// Index of the first body whose frame is neither head_frame nor world_frame, -1 if none.
+  static int bodyInUnknownFrame(const SimConfig& config);
   /// The head pose at t: the scenario's keyframes turned by the head-motion events.
   Iso3 headPose(double t, const EventSample& events) const;
   /// World pose of every body's frame for a head pose.
