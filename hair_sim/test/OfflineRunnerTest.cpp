@@ -259,6 +259,18 @@ TEST(OfflineRunnerTest, CommandReportsAFailedBagWriteWithoutAborting) {
   EXPECT_FALSE(exists(bag));
 }
 
+TEST(OfflineRunnerTest, CommandWithABagAloneWritesNoPly) {
+  // The bag needs meshes, and PLY files were written for them too, at "" + "/frame_00000.ply": in the
+  // filesystem's root (as root), or the run failed there (as anyone else). 2026-11-29: 171 such files in /.
+  std::remove("/frame_00000.ply");
+  const std::string bag = test::tempPath("alone.bag");
+  const Command c =
+      shell(kBin + kConfigArg + " --scenario " + shortScenario("bag_alone.yaml", 0.1) + " --bag " + bag);
+  EXPECT_EQ(c.status, 0) << c.out;
+  EXPECT_TRUE(exists(bag));
+  EXPECT_FALSE(exists("/frame_00000.ply"));
+}
+
 TEST(OfflineRunnerTest, CommandStopsAtTheFirstFailedCsvWriteAndRemovesTheFiles) {
   const std::string csv = test::tempPath("limited.csv"), poses = test::tempPath("limited_poses.csv");
   // 10 s of frames (about 16 MB of CSV) against a 100 kB limit: the first frame fails.
