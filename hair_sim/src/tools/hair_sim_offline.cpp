@@ -23,6 +23,7 @@
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/util/YamlReader.hpp"
 #include "hair_sim/ros/BagWriter.hpp"
+#include "hair_sim/tools/Arguments.hpp"
 #include "hair_sim/tools/OfflineRunner.hpp"
 
 namespace {
@@ -230,13 +231,7 @@ int main(int argc, char** argv) {
   if (out_path.empty() && bag_path.empty() && mesh_dir.empty())
     return usageError("--out, --bag or --mesh-out is required");
   auto positive = [](const std::string& text, long long& out) {
-    try {
-      std::size_t used = 0;
-      out = std::stoll(text, &used);
-      return used == text.size() && out > 0;
-    } catch (const std::exception&) {
-      return false;
-    }
+    return hair_sim::parseInteger(text, out) && out > 0;
   };
   long long number = 0;
   if (!across.empty()) {
@@ -255,13 +250,7 @@ int main(int argc, char** argv) {
     options.mesh.max_triangles = number;
   }
   auto positiveReal = [](const std::string& text, double& out) {
-    try {
-      std::size_t used = 0;
-      out = std::stod(text, &used);
-      return used == text.size() && std::isfinite(out) && out > 0.0;
-    } catch (const std::exception&) {
-      return false;
-    }
+    return hair_sim::parseReal(text, out) && out > 0.0;
   };
   if (!teleport_distance.empty() && !positiveReal(teleport_distance, options.teleport_distance))
     return usageError("--teleport-distance: '" + teleport_distance + "' is not a number > 0 (m)");
