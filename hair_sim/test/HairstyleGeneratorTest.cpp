@@ -121,5 +121,51 @@ TEST(HairstyleGeneratorTest, RejectsBadOptions) {
   EXPECT_NO_THROW(generateHairstyle(kScalp, o));
 }
 
+TEST(HairstyleGeneratorTest, RejectsOptionsAboveTheLoadersAndMemoryLimits) {
+  // The loader's grid limits (hair_sim_generate used to write 65 columns and 300 rows, which
+  // hair_sim_offline then refused), and caps that keep memory bounded (10^7 rows took 18 GB).
+  GeneratorOptions o;
+  o.columns = Strip::kMaxColumns + 1;
+  test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "columns 65 > 64");
+  o = GeneratorOptions();
+  o.rows = Strip::kMaxRows + 1;
+  test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "rows 257 > 256");
+  o = GeneratorOptions();
+  o.strips = GeneratorOptions::kMaxStrips + 1;
+  test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "strips 100001 > 100000");
+  o = GeneratorOptions();
+  o.rings = GeneratorOptions::kMaxRings + 1;
+  test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "rings 1001 > 1000");
+  o = GeneratorOptions();
+  o.strips = 2000;
+  o.columns = 64;
+  o.rows = 256;
+  test::expectInvalid([&] { generateHairstyle(kScalp, o); }, "control points > 1000000");
+  // generatedStripCount is the count generateHairstyle makes (3 a ring at least).
+  o = GeneratorOptions();
+  EXPECT_EQ(generatedStripCount(o), static_cast<int>(generateHairstyle(kScalp, o).strips.size()));
+  o.strips = 1;
+  o.rings = 4;
+  EXPECT_EQ(generatedStripCount(o), 12);
+  EXPECT_EQ(generateHairstyle(kScalp, o).strips.size(), 12u);
+}
+
+TEST(HairstyleGeneratorTest, RejectsABodyInAFrameOtherThanTheHeadOrTheWorld) {
+  // As the offline runner does; it was taken as fixed in the world.
+  SimConfig config;
+  config.bodies.push_back(
+      {"torso", config.world_frame, Ellipsoid(Vec3(0, 0, 1.13), Mat3::Identity(), Vec3(0.11, 0.17, 0.27))});
+  config.bodies.push_back(
+      {"neck", "neck", Ellipsoid(Vec3(-0.01, 0, 1.45), Mat3::Identity(), Vec3(0.05, 0.05, 0.09))});
+  Iso3 head = Iso3::Identity();
+  head.translation() = Vec3(0, 0, 1.6);
+  test::expectInvalid(
+      [&] { generateHairstyle(config, head, GeneratorOptions()); },
+      "bodies: body 'neck' is in frame 'neck': the generator knows only head_frame 'head' and "
+      "world_frame 'world'");
+  config.bodies.pop_back();
+  EXPECT_NO_THROW(generateHairstyle(config, head, GeneratorOptions()));
+}
+
 }  // namespace
 }  // namespace hair_sim

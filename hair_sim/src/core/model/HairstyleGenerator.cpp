@@ -65,18 +65,64 @@ double splineLength(const Strip& s) {
   return shortest * (1.0 - 1e-6);
 }
 
+/// Each ring's share of the strips: in proportion to its circumference (sin of its mean polar angle).
+struct Rings {
+  std::vector<double> fraction, weight;
+  double weight_sum = 0.0;
+  explicit Rings(int rings)
+      : fraction(static_cast<std::size_t>(rings)), weight(static_cast<std::size_t>(rings)) {
+    for (std::size_t k = 0; k < fraction.size(); ++k) {
+      fraction[k] = (static_cast<double>(k) + 0.6) / (rings + 0.1);
+      weight[k] = std::sin(fraction[k] * hairlineAlpha(kPi / 2));
+      weight_sum += weight[k];
+    }
+  }
+  int count(std::size_t k, int strips) const {
+    return std::max(3, static_cast<int>(std::lround(strips * weight[k] / weight_sum)));
+  }
+};
+
 }  // namespace
+
+int generatedStripCount(const GeneratorOptions& o) {
+  if (o.strips < 1 || o.rings < 1 || o.strips > GeneratorOptions::kMaxStrips ||
+      o.rings > GeneratorOptions::kMaxRings)
+    throw std::invalid_argument("generatedStripCount(...) : strips " + std::to_string(o.strips) +
+                                " or rings " + std::to_string(o.rings) + " outside the generator's range");
+  const Rings rings(o.rings);
+  int n = 0;
+  for (std::size_t k = 0; k < rings.weight.size(); ++k) n += rings.count(k, o.strips);
+  return n;
+}
 
 Hairstyle generateHairstyle(const Ellipsoid& scalp, const GeneratorOptions& o,
                             const std::vector<Ellipsoid>& obstacles) {
   if (o.strips < 1)
     throw std::invalid_argument("generateHairstyle(...) : strips " + std::to_string(o.strips) + " < 1");
+  if (o.strips > GeneratorOptions::kMaxStrips)
+    throw std::invalid_argument("generateHairstyle(...) : strips " + std::to_string(o.strips) + " > " +
+                                std::to_string(GeneratorOptions::kMaxStrips));
   if (o.rings < 1)
     throw std::invalid_argument("generateHairstyle(...) : rings " + std::to_string(o.rings) + " < 1");
+  if (o.rings > GeneratorOptions::kMaxRings)
+    throw std::invalid_argument("generateHairstyle(...) : rings " + std::to_string(o.rings) + " > " +
+                                std::to_string(GeneratorOptions::kMaxRings));
   if (o.columns < Strip::kMinColumns)
     throw std::invalid_argument("generateHairstyle(...) : columns " + std::to_string(o.columns) + " < 2");
+  if (o.columns > Strip::kMaxColumns)
+    throw std::invalid_argument("generateHairstyle(...) : columns " + std::to_string(o.columns) + " > " +
+                                std::to_string(Strip::kMaxColumns));
   if (o.rows < Strip::kMinRows)
     throw std::invalid_argument("generateHairstyle(...) : rows " + std::to_string(o.rows) + " < 4");
+  if (o.rows > Strip::kMaxRows)
+    throw std::invalid_argument("generateHairstyle(...) : rows " + std::to_string(o.rows) + " > " +
+                                std::to_string(Strip::kMaxRows));
+  const long long points = static_cast<long long>(generatedStripCount(o)) * o.columns * o.rows;
+  if (points > GeneratorOptions::kMaxControlPoints)
+    throw std::invalid_argument("generateHairstyle(...) : " + std::to_string(generatedStripCount(o)) +
+                                " strips x columns " + std::to_string(o.columns) + " x rows " +
+                                std::to_string(o.rows) + " = " + std::to_string(points) +
+                                " control points > " + std::to_string(GeneratorOptions::kMaxControlPoints));
   if (!(o.length_front > 0.0))
     throw std::invalid_argument("generateHairstyle(...) : length_front " + formatDouble(o.length_front) +
                                 " m must be > 0");
@@ -88,22 +134,15 @@ Hairstyle generateHairstyle(const Ellipsoid& scalp, const GeneratorOptions& o,
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
 
   // Strips per ring in proportion to the ring's circumference (sin of its mean polar angle).
-  std::vector<double> ring_fraction(static_cast<std::size_t>(o.rings));
-  std::vector<double> weight(static_cast<std::size_t>(o.rings));
-  double weight_sum = 0.0;
-  for (int k = 0; k < o.rings; ++k) {
-    ring_fraction[static_cast<std::size_t>(k)] = (k + 0.6) / (o.rings + 0.1);
-    weight[static_cast<std::size_t>(k)] =
-        std::sin(ring_fraction[static_cast<std::size_t>(k)] * hairlineAlpha(kPi / 2));
-    weight_sum += weight[static_cast<std::size_t>(k)];
-  }
+  const Rings rings(o.rings);
+  const std::vector<double>& ring_fraction = rings.fraction;
 
   Hairstyle style;
   style.scalp = scalp;
   const double mean_radius = scalp.radii().mean();
   for (int k = 0; k < o.rings; ++k) {
     const std::size_t ks = static_cast<std::size_t>(k);
-    const int count = std::max(3, static_cast<int>(std::lround(o.strips * weight[ks] / weight_sum)));
+    const int count = rings.count(ks, o.strips);
     // Hair rooted higher lies over the layers below it: lift its drape surface by a gap per layer.
     const double lift = o.thickness_margin * 1.25 + o.layer_gap * (o.rings - 1 - k);
     std::vector<Ellipsoid> bodies;
@@ -165,6 +204,10 @@ Hairstyle generateHairstyle(const SimConfig& config, const Iso3& head_in_world,
   Ellipsoid scalp(Vec3::Zero(), Mat3::Identity(), Vec3(0.095, 0.075, 0.115));
   std::vector<Ellipsoid> obstacles;
   for (const Body& b : config.bodies) {
+    if (b.frame != config.head_frame && b.frame != config.world_frame)
+      throw std::invalid_argument("bodies: body '" + b.name + "' is in frame '" + b.frame +
+                                  "': the generator knows only head_frame '" + config.head_frame +
+                                  "' and world_frame '" + config.world_frame + "'");
     if (b.name == "head")
       scalp = b.shape;
     else

@@ -58,8 +58,8 @@ Hairstyle loadHairstyle(const std::string& path) {
     y.requireKeys({"name", "columns", "rows", "hair_length", "width", "thickness_margin", "color", "points"});
     Strip s;
     s.name = y.getString("name", "strip" + std::to_string(i));
-    s.columns = y.getInt("columns", Strip::kMinColumns, 64);
-    s.rows = y.getInt("rows", Strip::kMinRows, 256);
+    s.columns = y.getInt("columns", Strip::kMinColumns, Strip::kMaxColumns);
+    s.rows = y.getInt("rows", Strip::kMinRows, Strip::kMaxRows);
     s.hair_length = y.getDouble("hair_length", 1e-3, 10.0);
     s.width = y.getDouble("width", 1e-4, 1.0);
     s.thickness_margin = y.getDouble("thickness_margin", 0.0, 0.1, s.thickness_margin);

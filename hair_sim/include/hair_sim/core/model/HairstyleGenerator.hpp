@@ -12,6 +12,13 @@
 namespace hair_sim {
 
 struct GeneratorOptions {
+  /// Caps that keep the generator's memory and time bounded (1e6 control points: about 125 MB and 20 s):
+  /// strips and rings, and the control points of all strips (stripCount x columns x rows). Columns and
+  /// rows go up to Strip::kMaxColumns and Strip::kMaxRows, as the hairstyle loader takes.
+  static constexpr int kMaxStrips = 100000;
+  static constexpr int kMaxRings = 1000;
+  static constexpr long long kMaxControlPoints = 1000000;
+
   int strips = 100;                 ///< approximate number of strips (the rings round it)
   int rings = 5;                    ///< layers from the crown down to the ears/nape
   int columns = 2;                  ///< control points across a strip
@@ -28,13 +35,18 @@ struct GeneratorOptions {
   std::uint32_t seed = 7;
 };
 
+/// The number of strips generateHairstyle makes for these options (every ring has at least 3, so it can be
+/// more than options.strips). Needs strips and rings >= 1.
+int generatedStripCount(const GeneratorOptions& options);
+
 /// Obstacles are bodies at the rest pose expressed in the head frame (the scalp need not be listed).
 Hairstyle generateHairstyle(const Ellipsoid& scalp, const GeneratorOptions& options,
                             const std::vector<Ellipsoid>& obstacles = {});
 
 /// The same, draped over a config's bodies with the head frame at `head_in_world` (the rest pose):
 /// the body named "head" is the scalp, bodies in head_frame stay as they are, the others (in
-/// world_frame) are brought into the head frame. Without a "head" body the scalp is an adult head
+/// world_frame) are brought into the head frame; a body in any other frame is an error (as in the
+/// offline runner). Without a "head" body the scalp is an adult head
 /// of radii 0.095 x 0.075 x 0.115 m at the head frame's origin.
 Hairstyle generateHairstyle(const SimConfig& config, const Iso3& head_in_world,
                             const GeneratorOptions& options);

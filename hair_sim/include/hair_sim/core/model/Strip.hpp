@@ -12,6 +12,9 @@ namespace hair_sim {
 struct Strip {
   static constexpr int kMinColumns = 2;
   static constexpr int kMinRows = 4;
+  /// The largest grid the hairstyle loader takes (and hair_sim_generate makes).
+  static constexpr int kMaxColumns = 64;
+  static constexpr int kMaxRows = 256;
 
   std::string name;
   int columns = 2;
