@@ -1,9 +1,10 @@
 /// hair_sim_soak: a long offline run of random (seeded) events and head motion with the default
 /// config and hairstyle, checked as it goes. Usage:
-///   hair_sim_soak [--seconds S (3600)] [--seed N (1)] [--check-every S (10)] [--config FILE]
+///   hair_sim_soak [--seconds S (3600, at least 80)] [--seed N (1)] [--check-every S (10)] [--config FILE]
 ///                 [--band fail|report (fail)] [--json-out FILE]
-/// Prints a JSON summary on stdout (and to --json-out); exit status 0 when every check held, 1 when one
-/// failed (the summary lists them), 2 on a usage or input error.
+/// Prints a JSON summary on stdout (and to --json-out, which is opened before the run); exit status 0 when
+/// every check held, 1 when one failed (the summary lists them), 2 on a usage or input error (or when the
+/// summary could not be written to --json-out).
 ///
 /// The run: head keyframes every 0.25-3 s (a few cm around the rest position, roll/pitch/yaw within
 /// a person's range; one key in ten a violent jerk: 0.08-0.15 s to +-1.5 rad yaw) and one event every
@@ -43,13 +44,17 @@
 /// at t = 623.11 s of seed 1 then left the strips whipping at up to 69 m/s in the next one, 8 % over.)
 /// With the head still and no wind for the last 20 s the hair must settle: KE below 1e-6 J in the last
 /// second.
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -59,6 +64,7 @@
 
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/util/YamlReader.hpp"
+#include "hair_sim/tools/Arguments.hpp"
 #include "hair_sim/tools/OfflineRunner.hpp"
 
 #ifndef HAIR_SIM_REPO_ROOT
@@ -69,6 +75,12 @@ namespace hair_sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+/// The calm at the end of the run (no new event, the head at rest), in which the hair must settle.
+constexpr double kCalmSeconds = 20.0;
+/// The shortest run: the calm was a quarter of the run up to its 20 s (min(20, 0.25 seconds)), and
+/// shorter calms gave false failures: 1 s put the head's return to rest (active_end - 1 s) before t = 0,
+/// 5 and 15 s did not settle in their 1.25 and 3.75 s of calm. From 80 s the calm is the full 20 s.
+constexpr double kMinSeconds = 4.0 * kCalmSeconds;
 
 /// splitmix64: the same sequence on every platform (std:: distributions are not specified bit for bit).
 struct Random {
@@ -105,7 +117,7 @@ Generated generate(double seconds, std::uint64_t seed) {
   s.duration = seconds;
   s.output_rate = 240.0;  // every substep is a frame (the default substep is 1/240 s)
   const Vec3 rest(0.0, 0.0, 1.6);
-  const double calm = std::min(20.0, 0.25 * seconds);  // no new event, head at rest
+  const double calm = kCalmSeconds;  // no new event, head at rest (seconds >= kMinSeconds = 4 x calm)
   const double active_end = seconds - calm;
   s.head.push_back({0.0, rest, Vec3::Zero()});
   double t = 0.0;
@@ -228,9 +240,9 @@ std::string jsonString(const std::string& s) {
 }
 
 int usage(const std::string& message) {
-  std::cerr << "hair_sim_soak: " << message
-            << "\nusage: hair_sim_soak [--seconds S] [--seed N] [--check-every S] [--config FILE] "
-               "[--band fail|report] [--json-out FILE]\n";
+  std::cerr
+      << "hair_sim_soak: " << message << "\nusage: hair_sim_soak [--seconds S (" << formatDouble(kMinSeconds)
+      << "..1e6)] [--seed N] [--check-every S] [--config FILE] [--band fail|report] [--json-out FILE]\n";
   return 2;
 }
 
@@ -247,17 +259,24 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     if (i + 1 >= argc) return usage(a + ": a value is missing");
     const std::string v = argv[++i];
-    char* rest = nullptr;
-    if (a == "--seconds") {
-      seconds = std::strtod(v.c_str(), &rest);
-      if (*rest || !(seconds >= 1.0 && seconds <= 1e6))
-        return usage("--seconds " + v + ": must be in [1, 1e6]");
-    } else if (a == "--check-every") {
-      check_every = std::strtod(v.c_str(), &rest);
-      if (*rest || !(check_every > 0.0)) return usage("--check-every " + v + ": must be > 0");
-    } else if (a == "--seed") {
-      seed = std::strtoull(v.c_str(), &rest, 10);
-      if (*rest || v.empty()) return usage("--seed " + v + ": must be a non-negative integer");
+    try {
+      if (a == "--seconds") {
+        seconds = realArgument(a, v, kMinSeconds, 1e6, " s");
+        continue;
+      }
+      if (a == "--seed") {
+        seed = unsignedArgument(a, v, ULLONG_MAX);
+        continue;
+      }
+    } catch (const UsageError& e) {
+      const bool short_run = a == "--seconds" && std::strstr(e.what(), "below the minimum");
+      return usage(std::string(e.what()) + (short_run ? " (the run ends with " + formatDouble(kCalmSeconds) +
+                                                            " s of calm in which the hair must settle)"
+                                                      : ""));
+    }
+    if (a == "--check-every") {
+      if (!parseReal(v, check_every) || !(check_every > 0.0))
+        return usage("--check-every " + v + ": must be > 0");
     } else if (a == "--band") {
       if (v != "fail" && v != "report") return usage("--band " + v + ": must be fail or report");
       band_is_failure = v == "fail";
@@ -267,6 +286,23 @@ int main(int argc, char** argv) {
       json_out = v;
     } else {
       return usage("unknown option " + a);
+    }
+  }
+  // --json-out is opened now, so that a path that cannot be written fails at once, not after the run. A
+  // regular file gets a line that says the run has not finished (flushed: a full disk shows now too);
+  // the summary replaces it at the end.
+  std::FILE* json = nullptr;
+  bool json_regular = false;
+  if (!json_out.empty()) {
+    json = std::fopen(json_out.c_str(), "w");
+    if (!json) return usage("--json-out " + json_out + ": cannot open for writing: " + std::strerror(errno));
+    struct stat st;
+    json_regular = fstat(fileno(json), &st) == 0 && S_ISREG(st.st_mode);
+    if (json_regular &&
+        (std::fputs("{\"passed\": false, \"finished\": false}\n", json) < 0 || std::fflush(json) != 0)) {
+      const int error = errno;
+      std::fclose(json);
+      return usage("--json-out " + json_out + ": cannot write: " + std::strerror(error));
     }
   }
   try {
@@ -525,10 +561,22 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < failures.size(); ++i) o << (i ? ", " : "") << jsonString(failures[i]);
     o << "], \"passed\": " << (failures.empty() ? "true" : "false") << "}";
     std::cout << o.str() << std::endl;
-    if (!json_out.empty()) {
-      std::ofstream out(json_out);
-      out << o.str() << "\n";
-      if (!out) throw std::runtime_error(json_out + ": cannot write");
+    if (json) {
+      // A regular file's "not finished" line is replaced; any other file gets the summary alone.
+      int error = 0;
+      auto check = [&](bool ok) {
+        if (!ok && error == 0) error = errno != 0 ? errno : EIO;
+        return ok;
+      };
+      errno = 0;
+      if (json_regular && check(std::fflush(json) == 0) && check(ftruncate(fileno(json), 0) == 0))
+        std::rewind(json);
+      if (error == 0) check(std::fputs((o.str() + "\n").c_str(), json) >= 0) && check(std::fflush(json) == 0);
+      check(std::fclose(json) == 0);
+      if (error != 0)
+        throw std::runtime_error("--json-out " + json_out +
+                                 ": cannot write the summary: " + std::strerror(error) + " (the run " +
+                                 (failures.empty() ? "passed" : "failed") + ")");
     }
     return failures.empty() ? 0 : 1;
   } catch (const std::exception& e) {
