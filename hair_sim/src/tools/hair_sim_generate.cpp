@@ -21,6 +21,12 @@
 
 namespace {
 
+// Caps that keep memory and time bounded (a million control points: about 125 MB and 20 s; --rows
+// 10000000 used to take 18 GB): strips, rings (each has 3 strips at least) and all the strips' control
+// points. The generator itself has no such cap (hair_sim_step_profile asks it for up to 1e6 strips).
+constexpr int kMaxStrips = 100000;
+constexpr int kMaxRings = 1000;
+constexpr long long kMaxControlPoints = 1000000;
 // Hair lengths (m): the loader takes hair_length in [0.001, 10] m, and the generator varies each strip's
 // length by +-8 % (GeneratorOptions::length_jitter) and ends it where its spline ends (a little short of
 // its control polygon), so the flags stay that far inside.
@@ -97,9 +103,9 @@ int main(int argc, char** argv) {
       if (a == "--out")
         out = v;
       else if (a == "--strips")
-        o.strips = static_cast<int>(integerArgument(a, v, 1, hair_sim::GeneratorOptions::kMaxStrips));
+        o.strips = static_cast<int>(integerArgument(a, v, 1, kMaxStrips));
       else if (a == "--rings")
-        o.rings = static_cast<int>(integerArgument(a, v, 1, hair_sim::GeneratorOptions::kMaxRings));
+        o.rings = static_cast<int>(integerArgument(a, v, 1, kMaxRings));
       else if (a == "--columns")
         o.columns = static_cast<int>(
             integerArgument(a, v, hair_sim::Strip::kMinColumns, hair_sim::Strip::kMaxColumns));
@@ -122,12 +128,12 @@ int main(int argc, char** argv) {
     if (out.empty()) return usageError("--out is required");
     const long long strips = hair_sim::generatedStripCount(o);
     const long long points = strips * o.columns * o.rows;
-    if (points > hair_sim::GeneratorOptions::kMaxControlPoints)
+    if (points > kMaxControlPoints)
       return usageError("--strips " + std::to_string(o.strips) + " --rings " + std::to_string(o.rings) +
                         " --columns " + std::to_string(o.columns) + " --rows " + std::to_string(o.rows) +
                         ": " + std::to_string(strips) + " strips of " + std::to_string(o.columns * o.rows) +
                         " = " + std::to_string(points) + " control points, above the maximum " +
-                        std::to_string(hair_sim::GeneratorOptions::kMaxControlPoints));
+                        std::to_string(kMaxControlPoints));
   } catch (const hair_sim::UsageError& e) {
     return usageError(e.what());
   }

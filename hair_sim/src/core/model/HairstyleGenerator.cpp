@@ -85,10 +85,9 @@ struct Rings {
 }  // namespace
 
 int generatedStripCount(const GeneratorOptions& o) {
-  if (o.strips < 1 || o.rings < 1 || o.strips > GeneratorOptions::kMaxStrips ||
-      o.rings > GeneratorOptions::kMaxRings)
+  if (o.strips < 1 || o.rings < 1)
     throw std::invalid_argument("generatedStripCount(...) : strips " + std::to_string(o.strips) +
-                                " or rings " + std::to_string(o.rings) + " outside the generator's range");
+                                " and rings " + std::to_string(o.rings) + " must be >= 1");
   const Rings rings(o.rings);
   int n = 0;
   for (std::size_t k = 0; k < rings.weight.size(); ++k) n += rings.count(k, o.strips);
@@ -99,14 +98,8 @@ Hairstyle generateHairstyle(const Ellipsoid& scalp, const GeneratorOptions& o,
                             const std::vector<Ellipsoid>& obstacles) {
   if (o.strips < 1)
     throw std::invalid_argument("generateHairstyle(...) : strips " + std::to_string(o.strips) + " < 1");
-  if (o.strips > GeneratorOptions::kMaxStrips)
-    throw std::invalid_argument("generateHairstyle(...) : strips " + std::to_string(o.strips) + " > " +
-                                std::to_string(GeneratorOptions::kMaxStrips));
   if (o.rings < 1)
     throw std::invalid_argument("generateHairstyle(...) : rings " + std::to_string(o.rings) + " < 1");
-  if (o.rings > GeneratorOptions::kMaxRings)
-    throw std::invalid_argument("generateHairstyle(...) : rings " + std::to_string(o.rings) + " > " +
-                                std::to_string(GeneratorOptions::kMaxRings));
   if (o.columns < Strip::kMinColumns)
     throw std::invalid_argument("generateHairstyle(...) : columns " + std::to_string(o.columns) + " < 2");
   if (o.columns > Strip::kMaxColumns)
@@ -117,12 +110,6 @@ Hairstyle generateHairstyle(const Ellipsoid& scalp, const GeneratorOptions& o,
   if (o.rows > Strip::kMaxRows)
     throw std::invalid_argument("generateHairstyle(...) : rows " + std::to_string(o.rows) + " > " +
                                 std::to_string(Strip::kMaxRows));
-  const long long points = static_cast<long long>(generatedStripCount(o)) * o.columns * o.rows;
-  if (points > GeneratorOptions::kMaxControlPoints)
-    throw std::invalid_argument("generateHairstyle(...) : " + std::to_string(generatedStripCount(o)) +
-                                " strips x columns " + std::to_string(o.columns) + " x rows " +
-                                std::to_string(o.rows) + " = " + std::to_string(points) +
-                                " control points > " + std::to_string(GeneratorOptions::kMaxControlPoints));
   if (!(o.length_front > 0.0))
     throw std::invalid_argument("generateHairstyle(...) : length_front " + formatDouble(o.length_front) +
                                 " m must be > 0");

@@ -12,13 +12,6 @@
 namespace hair_sim {
 
 struct GeneratorOptions {
-  /// Caps that keep the generator's memory and time bounded (1e6 control points: about 125 MB and 20 s):
-  /// strips and rings, and the control points of all strips (stripCount x columns x rows). Columns and
-  /// rows go up to Strip::kMaxColumns and Strip::kMaxRows, as the hairstyle loader takes.
-  static constexpr int kMaxStrips = 100000;
-  static constexpr int kMaxRings = 1000;
-  static constexpr long long kMaxControlPoints = 1000000;
-
   int strips = 100;                 ///< approximate number of strips (the rings round it)
   int rings = 5;                    ///< layers from the crown down to the ears/nape
   int columns = 2;                  ///< control points across a strip
