@@ -24,20 +24,13 @@ NODE=$DEVEL/lib/hair_sim/hair_sim_node
 CONFIG=$SOURCE/config/hair_sim.yaml
 failures=0
 n=0
-# expect_refused DESCRIPTION EXPECTED_TEXT ARGS...
+# shellcheck source=test/expect_exit.sh
+. "$(dirname "$0")/expect_exit.sh"
+# expect_refused DESCRIPTION EXPECTED_TEXT ARGS...: $NODE with ARGS stops with status 1 saying EXPECTED_TEXT.
 expect_refused() {
   local what=$1 text=$2
   shift 2
-  n=$((n + 1))
-  local status=0
-  timeout 20 "$NODE" __name:=hair_sim_bad_$n "$@" >"$TMP/out.log" 2>&1 || status=$?
-  if [ "$status" -ne 1 ]; then
-    echo "FAIL: $what: exit status $status (expected 1)"; sed 's/^/    /' "$TMP/out.log" | tail -5; failures=$((failures + 1))
-  elif ! grep -qF -- "$text" "$TMP/out.log"; then
-    echo "FAIL: $what: no \"$text\" in:"; sed 's/^/    /' "$TMP/out.log" | tail -5; failures=$((failures + 1))
-  else
-    echo "ok: $what: $(grep -F -- "$text" "$TMP/out.log" | head -1 | sed 's/.*hair_sim: //')"
-  fi
+  expect_exit 1 "$text" "$what" "$NODE" __name:=hair_sim_bad_$((n + 1)) "$@"
 }
 expect_refused "no config_file" "parameter ~config_file" 
 # A relative path, as `config:=hair_sim.yaml` gives it: roslaunch reads it from the shell's directory, the node

@@ -10,21 +10,13 @@ TMP=$(mktemp -d /tmp/hair_sim_tool_arguments.XXXXXX)
 trap 'rm -rf "$TMP"' EXIT
 failures=0
 n=0
+# shellcheck source=test/expect_exit.sh
+. "$(dirname "$0")/expect_exit.sh"
 # expect STATUS TEXT PROGRAM ARGS...: the program exits with STATUS and its stderr (or stdout) contains TEXT.
 expect() {
   local want=$1 text=$2
   shift 2
-  n=$((n + 1))
-  local status=0
-  timeout 30 "$@" >"$TMP/out.log" 2>"$TMP/err.log" || status=$?
-  if [ "$status" -ne "$want" ]; then
-    echo "FAIL: ${*:2}: exit status $status (expected $want)"; sed 's/^/    /' "$TMP/err.log" | head -3
-    failures=$((failures + 1))
-  elif ! cat "$TMP/err.log" "$TMP/out.log" | grep -qF -- "$text"; then
-    echo "FAIL: ${*:2}: no \"$text\" in:"; sed 's/^/    /' "$TMP/err.log" | head -3; failures=$((failures + 1))
-  else
-    echo "ok: ${*:2}: $(cat "$TMP/err.log" "$TMP/out.log" | grep -F -- "$text" | head -1)"
-  fi
+  expect_exit "$want" "$text" "${*:2}" "$@"
 }
 OUT=$TMP/style.yaml
 # --- hair_sim_generate: flags (exit 2, the flag and the value named) ---
