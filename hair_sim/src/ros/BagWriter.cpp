@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
+#include <vector>
 
 namespace hair_sim {
 
@@ -47,9 +48,11 @@ void BagWriter::abandon() noexcept {
     bag_.reset();
   } catch (...) {
     // close() failed half way (e.g. writing the index on a full disk): the bag stays "open" and
-    // ~Bag() would call close() again, which throws from a destructor (std::terminate). Drop the
-    // handle instead; its memory and file descriptor are released at exit.
-    static_cast<void>(bag_.release());
+    // ~Bag() would call close() again, which throws from a destructor (std::terminate). Keep the handle
+    // instead, never destroyed but reachable (so a leak checker does not report it); its memory and file
+    // descriptor are released at exit.
+    static std::vector<rosbag::Bag*>& abandoned = *new std::vector<rosbag::Bag*>();
+    abandoned.push_back(bag_.release());
   }
 }
 

@@ -12,6 +12,10 @@
 namespace hair_sim {
 
 YamlReader YamlReader::loadFile(const std::string& path) {
+  std::error_code ignored;
+  // Not through yaml-cpp: it opens a directory, fails to read it and leaks its buffer.
+  if (std::filesystem::is_directory(path, ignored))
+    throw std::invalid_argument(path + ": is a directory, not a file");
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
@@ -20,10 +24,7 @@ YamlReader YamlReader::loadFile(const std::string& path) {
   } catch (const YAML::ParserException& e) {
     throw std::invalid_argument(path + " (line " + std::to_string(e.mark.line + 1) +
                                 "): YAML syntax error: " + e.msg);
-  } catch (const std::exception& e) {  // a directory opens but cannot be read (basic_filebuf::underflow)
-    std::error_code ignored;
-    if (std::filesystem::is_directory(path, ignored))
-      throw std::invalid_argument(path + ": is a directory, not a file");
+  } catch (const std::exception& e) {  // e.g. a file that opens but cannot be read
     throw std::invalid_argument(path + ": cannot read the file (" + e.what() + ")");
   }
   if (!root.IsMap()) {
