@@ -23,7 +23,9 @@ in one message stamped now) and, in this order on the same node, sends:
                            refused (too many events scheduled); the hair steps on
   test_n_odom_teleport     world -> odom, the frame above the head, jumps 1.0 m sideways between two messages
                            (a localisation's correction): the hair goes with the head rigidly, as in test_g
-  test_o_body_jump         world -> neck jumps 1.0 m down between two messages: held until the new one (the
+  test_o_odom_turn         odom turns ODOM_YAW about its z axis, 1 m from the head: under teleport_angle, but
+                           the head moves 0.59 m (over teleport_distance): the hair goes rigidly, as in test_g
+  test_q_body_jump         world -> neck jumps 1.0 m down between two messages: held until the new one (the
                            neck jumps within one substep, not swept through the hair over 10 ms), said
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
@@ -87,6 +89,7 @@ STALL = 3.0  # s: the node's process stopped
 STALL_RATE_MAX = 1.2  # x publish_rate after the stall (the tf backlog stepped one message at a time: 2.4 x)
 GAP = 12.0  # s without head tf: beyond the tf cache (10 s)
 STEP_FRACTION = 0.5  # of 240 substeps per second: the hair steps on (not frozen at the old pose)
+ODOM_YAW = 0.6  # rad: odom's turn in test_o (the node's ~teleport_angle is 1.0 rad)
 
 
 def quat_yaw(yaw):
@@ -103,7 +106,8 @@ class RobustnessChecks(unittest.TestCase):
     states = []  # (receipt wall time, HairState)
     logs = []  # (level, text) from the node
     head = list(HOME)  # where the broadcaster puts the head in odom
-    odom = (0.0, 0.0, 0.0)  # where the broadcaster puts odom in the world (no rotation)
+    odom = (0.0, 0.0, 0.0)  # where the broadcaster puts odom in the world
+    odom_yaw = 0.0  # and how it turns odom (rad, about z)
     quaternion = (0.0, 0.0, 0.0, 1.0)
     broadcasting = True
     neck_broadcasting = True  # world -> neck, the frame of the neck body in the test's config
@@ -161,10 +165,11 @@ class RobustnessChecks(unittest.TestCase):
         while not cls.stop.is_set() and not rospy.is_shutdown():
             with cls.lock:
                 go, position, q, odom, neck_at = cls.broadcasting, tuple(cls.head), cls.quaternion, cls.odom, cls.neck
+                odom_q = quat_yaw(cls.odom_yaw)
                 neck = go and cls.neck_broadcasting
             if go:
                 stamp = rospy.Time.now()
-                above = cls.transform(stamp, odom, (0.0, 0.0, 0.0, 1.0), parent=cls.world_frame)
+                above = cls.transform(stamp, odom, odom_q, parent=cls.world_frame)
                 above.child_frame_id = 'odom'
                 cls.send(cls.transform(stamp, position, q), above)
             if neck:
@@ -352,12 +357,13 @@ class RobustnessChecks(unittest.TestCase):
         with self.lock:
             after = [m for (w, m) in self.states if w > t0 - 0.2]
         tips_before = self.tips(before, head, yaw)
-        offset = rotate_yaw(self.root_offsets[0], yaw)
+        old_root = [h + o for h, o in zip(head, rotate_yaw(self.root_offsets[0], yaw))]
+        new_root = [h + o for h, o in zip(new_head, rotate_yaw(self.root_offsets[0], new_yaw))]
         worst = 0.0
         for msg in after:
             # States stamped before the jump still show the head where it was: compare each with its own head.
             root = strip_points(msg.strips[0])[0]
-            jumped = math.hypot(root.x - head[0] - offset[0], root.y - head[1] - offset[1]) > TELEPORT / 2
+            jumped = math.dist((root.x, root.y, root.z), new_root) < math.dist((root.x, root.y, root.z), old_root)
             tips = self.tips(msg, new_head, new_yaw) if jumped else self.tips(msg, head, yaw)
             worst = max(worst, max(math.sqrt(sum((a - b) ** 2 for a, b in zip(t, r)))
                                    for t, r in zip(tips, tips_before)))
@@ -490,19 +496,42 @@ class RobustnessChecks(unittest.TestCase):
                       1e3 * worst)
         self.assertLess(worst, TELEPORT_TIP_MOVE, 'tips moved %.3f m relative to the head over the jump of odom' %
                         worst)
-        said = self.expect_log(since, 'jumped 1.000 m and 0.000 rad between two messages')
+        said = self.expect_log(since, 'jumped 1.000 m at the head and 0.000 rad between two messages')
         self.assertIn('tf %s -> odom from ' % self.world_frame, said)
         self.expect_log(since, 'the head jumped 1.000 m and 0.000 rad')
         self.steps_on(self.watch(WATCH, new_head, TELEPORT_YAW))
 
-    def test_o_body_jump(self):
-        head = tuple(a + b for a, b in zip(self.head, self.odom))
+    def test_q_body_jump(self):
+        yaw = TELEPORT_YAW + self.odom_yaw  # the head's, turned with odom by test_o
+        head = tuple(a + b for a, b in zip(self.odom, rotate_yaw(self.head, self.odom_yaw)))
         since = self.log_index()
         with self.lock:
             type(self).neck = (0.0, 0.0, -TELEPORT)
         said = self.expect_log(since, 'jumped 1.000 m and 0.000 rad between two messages')
         self.assertIn('tf %s -> neck from ' % self.world_frame, said)
-        self.steps_on(self.watch(WATCH, head, TELEPORT_YAW))
+        self.steps_on(self.watch(WATCH, head, yaw))
+
+    def test_o_odom_turn(self):
+        odom, in_odom = self.odom, tuple(self.head)  # odom is not turned until now
+        head = tuple(a + b for a, b in zip(odom, in_odom))
+        new_head = tuple(a + b for a, b in zip(odom, rotate_yaw(in_odom, ODOM_YAW)))
+        moved = math.dist(head, new_head)
+        self.assertGreater(moved, 0.5, 'the test needs the head more than teleport_distance from odom\'s axis')
+        since = self.log_index()
+
+        def move():
+            type(self).odom_yaw = ODOM_YAW
+        # The 0.5 m/s wind test_i left blowing along x turns with the head relative to the hair: the tips start
+        # to follow it (about 20 mm in the 0.2 s; 611 mm when tf interpolated the turn over 10 ms).
+        worst = self.rigid_over_jump(head, TELEPORT_YAW, new_head, TELEPORT_YAW + ODOM_YAW, move)
+        rospy.loginfo('%s: odom turned %.1f rad, the head moved %.3f m: tips moved at most %.1f mm in head '
+                      'coordinates', NAME, ODOM_YAW, moved, 1e3 * worst)
+        self.assertLess(worst, TELEPORT_TIP_MOVE, 'tips moved %.3f m relative to the head over the turn of odom' %
+                        worst)
+        said = self.expect_log(since, 'jumped %.3f m at the head and 0.600 rad between two messages' % moved)
+        self.assertIn('tf %s -> odom from ' % self.world_frame, said)
+        self.expect_log(since, 'the head jumped %.3f m and 0.600 rad' % moved)
+        self.steps_on(self.watch(WATCH, new_head, TELEPORT_YAW + ODOM_YAW))
 
     def node_pid(self):
         uri = rosgraph.Master('/' + NAME).lookupNode(self.node)

@@ -519,6 +519,17 @@ void HairSimNode::noteParent(const std::string& child, const std::string& parent
   for (const Body& body : config_.bodies) climb(body.frame);
 }
 
+bool HairSimNode::isAboveHead(const std::string& frame) const {
+  std::string below = config_.head_frame;
+  for (std::size_t depth = 0; depth < parent_frame_.size(); ++depth) {  // bounded: a loop in the tree
+    const auto up = parent_frame_.find(below);
+    if (up == parent_frame_.end()) return false;
+    if (up->second == frame) return true;
+    below = up->second;
+  }
+  return false;
+}
+
 void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority) {
   geometry_msgs::TransformStamped& last = last_tf_[t.child_frame_id];
   const geometry_msgs::TransformStamped previous = last;
@@ -526,7 +537,19 @@ void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const
   last = t;
   if (previous.header.frame_id != t.header.frame_id) return;
   const Iso3 a = tf2::transformToEigen(previous), b = tf2::transformToEigen(t);
-  const double distance = (b.translation() - a.translation()).norm();
+  // For a frame above the head, how far the head moves: a turn moves it more than the frame's origin (a yaw
+  // of 0.6 rad moves a head 1 m from the axis by 0.59 m). The head turns by the frame's own angle.
+  Vec3 at = Vec3::Zero();  // the head's origin in the jumping frame, else the frame's own origin
+  const bool above_head = t.child_frame_id != config_.head_frame && isAboveHead(t.child_frame_id);
+  if (above_head) {
+    try {
+      at = tf2::transformToEigen(
+               tf_buffer_.lookupTransform(t.child_frame_id, config_.head_frame, ros::Time(0)))
+               .translation();
+    } catch (const tf2::TransformException&) {  // the head not yet in tf: the frame's origin
+    }
+  }
+  const double distance = (b * at - a * at).norm();
   const double angle = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
   if (distance <= teleport_distance_ && angle <= teleport_angle_) return;
   // tf would interpolate the jump over the time between the two messages, a whip of the hair across the
@@ -544,11 +567,11 @@ void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const
   if (t.child_frame_id == config_.head_frame) return;
   char text[512];
   std::snprintf(text, sizeof(text),
-                "hair_sim: tf %s -> %s from %s jumped %.3f m and %.3f rad between two messages "
+                "hair_sim: tf %s -> %s from %s jumped %.3f m%s and %.3f rad between two messages "
                 "(teleport_distance %.3f m, teleport_angle %.3f rad): held until the new one, so the frames "
                 "below it jump within one substep",
-                t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(), distance, angle,
-                teleport_distance_, teleport_angle_);
+                t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(), distance,
+                above_head ? " at the head" : "", angle, teleport_distance_, teleport_angle_);
   warnThrottled("jump of " + t.child_frame_id, text);
 }
 

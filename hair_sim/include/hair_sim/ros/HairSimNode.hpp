@@ -60,11 +60,14 @@ class HairSimNode {
   /// node's TCPROS port (setTcpNoDelayOnAccepted), as roscpp does when a subscriber asks for it.
   void onSubscriberConnect();
   /// A transform of the head frame, of a body's frame or of a frame above either (map -> odom, say) that
-  /// jumps beyond the teleport limits from the previous one of its child frame: the previous one is put in
+  /// jumps beyond the teleport limits from the previous one of its child frame (for a frame above the head,
+  /// the distance the head moves): the previous one is put in
   /// the buffer again just before it, so that the jump falls within one substep (a teleport of the head, or
   /// a body that jumps) instead of a sweep that tf would interpolate between the two messages. Said for any
   /// frame but the head's own (whose teleport the step reports).
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
+  /// Whether `frame` is above the head frame in parent_frame_.
+  bool isAboveHead(const std::string& frame) const;
   /// Records `parent` as `child`'s parent frame (parent_frame_); when that is news, hair_frames_ again.
   void noteParent(const std::string& child, const std::string& parent);
   /// Stamp order of a non-static transform against the newest one of its child frame: false (with a
