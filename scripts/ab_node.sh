@@ -1,0 +1,85 @@
+#!/bin/bash
+# Compares hair_sim_node of another commit with the working tree's, in one sitting, as ./run.sh bench measures
+# the node: builds hair_sim_node (Release) of OLD in a git worktree under AB_DIR and of the working tree in
+# build-release/ (scripts/ab_build.sh), then runs launch/demo.launch (rviz:=false) of the working tree with each
+# node in turn (the binary put in build-release's devel space; it loads its own libraries by its RUNPATH) and
+# measures it from outside with scripts/bench_node.py for SECONDS: CPU share with the markers subscribed and
+# with hair_state alone, tf -> markers latency. Half the rounds run the old node first, half the new one first:
+# on this VM the second node of a pair did worse in five of six pairs (docs/benchmarks.md, stop 46). Prints one
+# line per window and the medians.
+#
+# usage: scripts/ab_node.sh OLD_COMMIT [ROUNDS=6] [SECONDS=20]
+set -euo pipefail
+if [ $# -lt 1 ]; then
+  sed -n '2,10p' "$0" >&2
+  exit 2
+fi
+ROUNDS=${2:-6}
+SECONDS_PER_WINDOW=${3:-20}
+# shellcheck source=scripts/ab_build.sh
+. "$(dirname "$0")/ab_build.sh"
+ab_build "$1" hair_sim_node
+cmake --build "$ROOT/build-release" -j"$(nproc)" --target head_driver latency_probe >/dev/null
+B=$ROOT/build-release
+export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
+export ROS_HOSTNAME=localhost ROS_HOME=$B/ros_home ROS_LOG_DIR=$B/ros_home/log
+export ROS_MASTER_URI=http://localhost:${BENCH_PORT:-11611}
+mkdir -p "$ROS_LOG_DIR"
+set +u
+# shellcheck disable=SC1091
+source "$B/devel/setup.bash"
+set -u
+SAVED=$(mktemp -d /tmp/hair_sim_ab_node.XXXXXX)
+cp "$OLD_BIN" "$SAVED/old"
+cp "$NEW_BIN" "$SAVED/new"
+launch=""
+restore() {
+  [ -n "$launch" ] && { kill -INT "$launch" 2>/dev/null; wait "$launch" 2>/dev/null || true; }
+  cp "$SAVED/new" "$NEW_BIN"
+  rm -rf "$SAVED"
+}
+trap restore EXIT
+: >"$SAVED/windows.jsonl"
+for round in $(seq "$ROUNDS"); do
+  order="old new"
+  [ $((round % 2)) -eq 0 ] && order="new old"
+  for side in $order; do
+    cp "$SAVED/$side" "$NEW_BIN"
+    roslaunch -p "${ROS_MASTER_URI##*:}" "$ROOT/launch/demo.launch" rviz:=false >"$SAVED/launch.log" 2>&1 &
+    launch=$!
+    pid=""
+    for _ in $(seq 100); do
+      pid=$(pgrep -f "$NEW_BIN" | head -1 || true)
+      [ -n "$pid" ] && break
+      sleep 0.2
+    done
+    [ -n "$pid" ] || { echo "ab_node.sh: hair_sim_node did not start (log: $SAVED/launch.log)" >&2; exit 1; }
+    sleep 2
+    json=$(timeout $((2 * SECONDS_PER_WINDOW + 60)) /usr/bin/python3 "$ROOT/scripts/bench_node.py" "$pid" \
+      "$SECONDS_PER_WINDOW" "$B/devel/lib/hair_sim/latency_probe")
+    echo "{\"round\": $round, \"side\": \"$side\", \"node\": $json}" >>"$SAVED/windows.jsonl"
+    kill -INT "$launch"
+    wait "$launch" 2>/dev/null || true
+    launch=""
+    sleep 2
+  done
+done
+/usr/bin/python3 - "$SAVED/windows.jsonl" "$OLD" <<'PY'
+import json
+import statistics
+import sys
+
+rows = [json.loads(line) for line in open(sys.argv[1])]
+keys = [('cpu_share', 'CPU %', 100.0), ('state_only_cpu_share', 'CPU % (hair_state alone)', 100.0),
+        ('latency_ms_p50', 'tf -> markers p50 ms', 1.0), ('latency_ms_p99', 'tf -> markers p99 ms', 1.0)]
+for r in rows:
+    n = r['node']
+    print('round %d %s: ' % (r['round'], r['side']) +
+          ', '.join('%s %.2f' % (label, scale * n[k]) for k, label, scale in keys if k in n))
+print('old %s, new: the working tree; medians:' % sys.argv[2][:12])
+for k, label, scale in keys:
+    old = [scale * r['node'][k] for r in rows if r['side'] == 'old' and k in r['node']]
+    new = [scale * r['node'][k] for r in rows if r['side'] == 'new' and k in r['node']]
+    if old and new:
+        print('  %s: old %.2f, new %.2f' % (label, statistics.median(old), statistics.median(new)))
+PY
