@@ -20,47 +20,18 @@ SECONDS_PER_WINDOW=${3:-20}
 . "$(dirname "$0")/ab_build.sh"
 ab_build "$1" hair_sim_node
 cmake --build "$ROOT/build-release" -j"$(nproc)" --target head_driver latency_probe >/dev/null
-B=$ROOT/build-release
-export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
-export ROS_HOSTNAME=localhost ROS_HOME=$B/ros_home ROS_LOG_DIR=$B/ros_home/log
-export ROS_MASTER_URI=http://localhost:${BENCH_PORT:-11611}
-mkdir -p "$ROS_LOG_DIR"
-set +u
-# shellcheck disable=SC1091
-source "$B/devel/setup.bash"
-set -u
 SAVED=$(mktemp -d /tmp/hair_sim_ab_node.XXXXXX)
 cp "$OLD_BIN" "$SAVED/old"
 cp "$NEW_BIN" "$SAVED/new"
-launch=""
-restore() {
-  [ -n "$launch" ] && { kill -INT "$launch" 2>/dev/null; wait "$launch" 2>/dev/null || true; }
-  cp "$SAVED/new" "$NEW_BIN"
-  rm -rf "$SAVED"
-}
-trap restore EXIT
+trap 'cp "$SAVED/new" "$NEW_BIN"; rm -rf "$SAVED"' EXIT
 : >"$SAVED/windows.jsonl"
 for round in $(seq "$ROUNDS"); do
   order="old new"
   [ $((round % 2)) -eq 0 ] && order="new old"
   for side in $order; do
     cp "$SAVED/$side" "$NEW_BIN"
-    roslaunch -p "${ROS_MASTER_URI##*:}" "$ROOT/launch/demo.launch" rviz:=false >"$SAVED/launch.log" 2>&1 &
-    launch=$!
-    pid=""
-    for _ in $(seq 100); do
-      pid=$(pgrep -f "$NEW_BIN" | head -1 || true)
-      [ -n "$pid" ] && break
-      sleep 0.2
-    done
-    [ -n "$pid" ] || { echo "ab_node.sh: hair_sim_node did not start (log: $SAVED/launch.log)" >&2; exit 1; }
-    sleep 2
-    json=$(timeout $((2 * SECONDS_PER_WINDOW + 60)) /usr/bin/python3 "$ROOT/scripts/bench_node.py" "$pid" \
-      "$SECONDS_PER_WINDOW" "$B/devel/lib/hair_sim/latency_probe")
-    echo "{\"round\": $round, \"side\": \"$side\", \"node\": $json}" >>"$SAVED/windows.jsonl"
-    kill -INT "$launch"
-    wait "$launch" 2>/dev/null || true
-    launch=""
+    NODE_ONLY=1 NODE_SECONDS=$SECONDS_PER_WINDOW "$ROOT/scripts/bench.sh"  # the node's window, as the bench's
+    echo "{\"round\": $round, \"side\": \"$side\", \"node\": $(cat "$ROOT/build-release/node.json")}" >>"$SAVED/windows.jsonl"
     sleep 2
   done
 done
