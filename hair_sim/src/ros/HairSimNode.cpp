@@ -516,18 +516,9 @@ void HairSimNode::noteParent(const std::string& child, const std::string& parent
     }
   };
   climb(config_.head_frame);
+  above_head_ = hair_frames_;  // the head's climb alone
+  above_head_.erase(config_.head_frame);
   for (const Body& body : config_.bodies) climb(body.frame);
-}
-
-bool HairSimNode::isAboveHead(const std::string& frame) const {
-  std::string below = config_.head_frame;
-  for (std::size_t depth = 0; depth < parent_frame_.size(); ++depth) {  // bounded: a loop in the tree
-    const auto up = parent_frame_.find(below);
-    if (up == parent_frame_.end()) return false;
-    if (up->second == frame) return true;
-    below = up->second;
-  }
-  return false;
 }
 
 void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority) {
@@ -537,10 +528,11 @@ void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const
   last = t;
   if (previous.header.frame_id != t.header.frame_id) return;
   const Iso3 a = tf2::transformToEigen(previous), b = tf2::transformToEigen(t);
+  if (a.matrix() == b.matrix()) return;  // not moved (a fixed frame sent again): no lookup below
   // For a frame above the head, how far the head moves: a turn moves it more than the frame's origin (a yaw
   // of 0.6 rad moves a head 1 m from the axis by 0.59 m). The head turns by the frame's own angle.
   Vec3 at = Vec3::Zero();  // the head's origin in the jumping frame, else the frame's own origin
-  const bool above_head = t.child_frame_id != config_.head_frame && isAboveHead(t.child_frame_id);
+  const bool above_head = above_head_.count(t.child_frame_id) != 0;
   if (above_head) {
     try {
       at = tf2::transformToEigen(

@@ -66,9 +66,8 @@ class HairSimNode {
   /// a body that jumps) instead of a sweep that tf would interpolate between the two messages. Said for any
   /// frame but the head's own (whose teleport the step reports).
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
-  /// Whether `frame` is above the head frame in parent_frame_.
-  bool isAboveHead(const std::string& frame) const;
-  /// Records `parent` as `child`'s parent frame (parent_frame_); when that is news, hair_frames_ again.
+  /// Records `parent` as `child`'s parent frame (parent_frame_); when that is news, hair_frames_ and
+  /// above_head_ again.
   void noteParent(const std::string& child, const std::string& parent);
   /// Stamp order of a non-static transform against the newest one of its child frame: false (with a
   /// throttled warning naming frame and stamps) for a repeated stamp or one older than the tf cache, which
@@ -134,6 +133,7 @@ class HairSimNode {
   std::map<std::string, std::string> parent_frame_;  ///< child frame -> parent, from the tf received
   /// The head frame, the bodies' frames and every frame above them in parent_frame_ (holdBeforeJump's)
   std::set<std::string> hair_frames_;
+  std::set<std::string> above_head_;  ///< the frames above the head frame in parent_frame_ (noteParent's)
   std::map<std::string, ros::Time> newest_tf_stamp_;  ///< child frame -> newest stamp taken
   int strands_per_strip_ = 6;
 
