@@ -35,7 +35,7 @@ expect_exit 1 "the hairstyle made by --strips 100 --rings 5 --columns 2 --rows 2
   "$GENERATE" --out "$OUT" --length-front 0.002 --length-back 0.002 --rows 256
 sed -e "s|^hairstyle: .*|hairstyle: $SOURCE/config/hairstyles/default.yaml|" \
   -e '/name: head,/s|center: \[[^]]*\]|center: [150.0, 0.0, 0.0]|' "$SOURCE/config/hair_sim.yaml" >"$TMP/far_head.yaml"
-expect_exit 1 "--config $TMP/far_head.yaml --head-z 1.6 fails the hairstyle loader's checks, so $OUT was not written: scalp.center: every coordinate must be within +-100 m" "" \
+expect_exit 1 "--config $TMP/far_head.yaml --head-z 1.6 fails the hairstyle loader's checks, so $OUT was not written: scalp.center: [150, 0, 0] has a coordinate beyond +-100 m" "" \
   "$GENERATE" --out "$OUT" --config "$TMP/far_head.yaml"
 # A body in a frame that is neither the world nor the head: refused as hair_sim_offline refuses it.
 sed -e "s|^hairstyle: .*|hairstyle: $SOURCE/config/hairstyles/default.yaml|" \

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <functional>
+#include <limits>
 #include <regex>
 
 #include "TestUtil.hpp"
@@ -123,6 +125,49 @@ TEST(HairstyleTest, AStripGivenTwiceIsRefused) {
     for (std::size_t at = moved.find(z); at != std::string::npos; at = moved.find(z, at + 1))
       moved.replace(at, std::strlen(z) - 1, std::string(z, std::strlen(z) - 1) + "00002");
   EXPECT_NO_THROW(loadHairstyle(test::writeTemp("moved.yaml", text + moved))) << moved;
+}
+
+TEST(HairstyleTest, ValidateHoldsTheLoadersBoundsForHairstylesMadeInCode) {
+  // hair_sim_generate and code that builds a Hairstyle reach the Simulator without the loader, so validate
+  // itself holds every bound the loader puts on a value (the loader names the line first).
+  const Hairstyle good = test::hangingStrip(2, 5, 0.05, 0.0);
+  EXPECT_NO_THROW(good.validate("good"));
+  struct Case {
+    const char* what;
+    std::function<void(Hairstyle&)> spoil;
+    const char* message;
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Case> cases{
+      {"hair_length", [](Hairstyle& h) { h.strips[0].hair_length = 20.0; },
+       "code: strips[0].hair_length: 20 is outside [0.001, 10]"},
+      {"hair_length NaN", [&](Hairstyle& h) { h.strips[0].hair_length = nan; },
+       "code: strips[0].hair_length: nan is outside [0.001, 10]"},
+      {"width", [](Hairstyle& h) { h.strips[0].width = 2.0; },
+       "code: strips[0].width: 2 is outside [0.0001, 1]"},
+      {"thickness_margin", [](Hairstyle& h) { h.strips[0].thickness_margin = 0.5; },
+       "code: strips[0].thickness_margin: 0.5 is outside [0, 0.1]"},
+      {"color", [](Hairstyle& h) { h.strips[0].color.g = 1.5f; },
+       "code: strips[0].color[1]: 1.5 is outside [0, 1]"},
+      {"columns", [](Hairstyle& h) { h.strips[0].columns = 65; },
+       "code: strips[0].columns: 65 is outside [2, 64]"},
+      {"rows", [](Hairstyle& h) { h.strips[0].rows = 257; }, "code: strips[0].rows: 257 is outside [4, 256]"},
+      {"point", [](Hairstyle& h) { h.strips[0].points[7].x() = 150.0; },
+       "code: strips[0].points[7]: [150, 0.005, -0.050125078222809136] has a coordinate beyond +-100 m"},
+      {"point NaN", [&](Hairstyle& h) { h.strips[0].points[3].z() = nan; }, "code: strips[0].points[3]: "},
+      {"scalp radius",
+       [](Hairstyle& h) { h.scalp = Ellipsoid(Vec3::Zero(), Mat3::Identity(), Vec3(0.1, 20, 0.1)); },
+       "code: scalp.radii: every radius must be in (0, 10] m, got [0.1, 20, 0.1]"},
+      {"scalp center",
+       [](Hairstyle& h) { h.scalp = Ellipsoid(Vec3(0, 0, -200), Mat3::Identity(), Vec3(0.1, 0.1, 0.1)); },
+       "code: scalp.center: [0, 0, -200] has a coordinate beyond +-100 m"},
+  };
+  for (const Case& c : cases) {
+    Hairstyle h = good;
+    c.spoil(h);
+    const std::string m = test::errorOf([&] { h.validate("code"); });
+    EXPECT_NE(m.find(c.message), std::string::npos) << c.what << ": " << m;
+  }
 }
 
 TEST(HairstyleTest, ShippedDefaultHairstyleIsValidAndPaperSized) {

@@ -1,15 +1,9 @@
 /// hair_sim_generate: writes a procedural hairstyle YAML (config/hairstyles/default.yaml is made by it).
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <exception>
 #include <iostream>
-#include <regex>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -55,32 +49,20 @@ int usageError(const std::string& message) {
   return 2;
 }
 
-/// Checks the hairstyle as hair_sim_offline and the node will when they load it: writes it to a temporary
-/// file, loads that back with the same loader and removes it, so that nothing they would refuse is written.
-/// Throws std::runtime_error naming `recipe` (the flags that made the hairstyle) and the loader's message,
-/// without the temporary file's name or lines.
+/// Checks the hairstyle as hair_sim_offline and the node will when they load it (Hairstyle::validate, which
+/// the loader ends with and which holds every bound the loader puts on a value), so that nothing they would
+/// refuse is written. Throws std::runtime_error naming `recipe` (the flags that made the hairstyle).
 void checkAsLoaded(const hair_sim::Hairstyle& style, const std::string& out, const std::string& recipe) {
-  const char* dir = std::getenv("TMPDIR");
-  std::string temp = std::string(dir && *dir ? dir : "/tmp") + "/hair_sim_generate.XXXXXX";
-  const int fd = mkstemp(&temp[0]);
-  if (fd < 0) throw std::runtime_error(temp + ": cannot create a temporary file: " + std::strerror(errno));
-  close(fd);
+  const std::string source = "the hairstyle made by " + recipe;
   try {
-    hair_sim::saveHairstyle(style, temp);
-    hair_sim::loadHairstyle(temp);
+    style.validate(source);
   } catch (const std::invalid_argument& e) {
-    std::remove(temp.c_str());
-    // "<temp>: strips[0].hair_length (line 9): ..." -> "strips[0].hair_length: ..."
+    // "<source>: strips[0].hair_length: ..." -> "strips[0].hair_length: ..."
     std::string what = e.what();
-    if (what.compare(0, temp.size() + 2, temp + ": ") == 0) what.erase(0, temp.size() + 2);
-    what = std::regex_replace(what, std::regex(" \\(line [0-9]+\\)"), "");
-    throw std::runtime_error("the hairstyle made by " + recipe + " fails the hairstyle loader's checks, so " +
-                             out + " was not written: " + what);
-  } catch (...) {
-    std::remove(temp.c_str());
-    throw;
+    if (what.compare(0, source.size() + 2, source + ": ") == 0) what.erase(0, source.size() + 2);
+    throw std::runtime_error(source + " fails the hairstyle loader's checks, so " + out +
+                             " was not written: " + what);
   }
-  std::remove(temp.c_str());
 }
 
 }  // namespace

@@ -19,33 +19,55 @@ namespace {
 std::string vecString(const Vec3& v) {
   return "[" + formatDouble(v.x()) + ", " + formatDouble(v.y()) + ", " + formatDouble(v.z()) + "]";
 }
+
+/// "<key>: <value> is outside [lo, hi]" unless lo <= value <= hi (NaN is outside).
+void requireWithin(const std::string& key, double value, double lo, double hi) {
+  if (!(value >= lo && value <= hi))
+    throw std::invalid_argument(key + ": " + formatDouble(value) + " is outside [" + formatDouble(lo) + ", " +
+                                formatDouble(hi) + "]");
+}
+
+/// "<key>: <vec> is not finite" or "... is beyond +-100 m of the head frame's origin".
+void requireCoordinates(const std::string& key, const Vec3& p) {
+  if (!p.allFinite()) throw std::invalid_argument(key + ": " + vecString(p) + " is not finite");
+  if (!(p.cwiseAbs().maxCoeff() <= Hairstyle::kMaxCoordinate))
+    throw std::invalid_argument(key + ": " + vecString(p) + " has a coordinate beyond +-" +
+                                formatDouble(Hairstyle::kMaxCoordinate) + " m of the head frame's origin");
+}
+
 }  // namespace
 
 void Hairstyle::validate(const std::string& source, double root_tolerance) const {
+  requireCoordinates(source + ": scalp.center", scalp.center());
+  for (int a = 0; a < 3; ++a) {
+    if (!(scalp.radii()[a] > 0.0 && scalp.radii()[a] <= kMaxScalpRadius))
+      throw std::invalid_argument(source + ": scalp.radii: every radius must be in (0, " +
+                                  formatDouble(kMaxScalpRadius) + "] m, got " + vecString(scalp.radii()));
+  }
   if (strips.empty()) throw std::invalid_argument(source + ": strips: the hairstyle has no strips");
   for (std::size_t i = 0; i < strips.size(); ++i) {
     const Strip& s = strips[i];
     const std::string key = source + ": strips[" + std::to_string(i) + "]";
-    if (s.columns < Strip::kMinColumns)
-      throw std::invalid_argument(key + ".columns: " + std::to_string(s.columns) + " is below the minimum 2");
-    if (s.rows < Strip::kMinRows)
-      throw std::invalid_argument(key + ".rows: " + std::to_string(s.rows) + " is below the minimum 4");
+    if (s.columns < Strip::kMinColumns || s.columns > Strip::kMaxColumns)
+      throw std::invalid_argument(key + ".columns: " + std::to_string(s.columns) + " is outside [" +
+                                  std::to_string(Strip::kMinColumns) + ", " +
+                                  std::to_string(Strip::kMaxColumns) + "]");
+    if (s.rows < Strip::kMinRows || s.rows > Strip::kMaxRows)
+      throw std::invalid_argument(key + ".rows: " + std::to_string(s.rows) + " is outside [" +
+                                  std::to_string(Strip::kMinRows) + ", " + std::to_string(Strip::kMaxRows) +
+                                  "]");
     if (static_cast<int>(s.points.size()) != s.pointCount()) {
       throw std::invalid_argument(key + ".points: " + std::to_string(s.points.size()) +
                                   " points given, columns x rows = " + std::to_string(s.pointCount()));
     }
-    if (!(std::isfinite(s.hair_length) && s.hair_length > 0.0))
-      throw std::invalid_argument(key + ".hair_length: " + formatDouble(s.hair_length) + " must be > 0");
-    if (!(std::isfinite(s.width) && s.width > 0.0))
-      throw std::invalid_argument(key + ".width: " + formatDouble(s.width) + " must be > 0");
-    if (!(std::isfinite(s.thickness_margin) && s.thickness_margin >= 0.0))
-      throw std::invalid_argument(key + ".thickness_margin: " + formatDouble(s.thickness_margin) +
-                                  " must be >= 0");
-    for (std::size_t p = 0; p < s.points.size(); ++p) {
-      if (!s.points[p].allFinite())
-        throw std::invalid_argument(key + ".points[" + std::to_string(p) + "]: " + vecString(s.points[p]) +
-                                    " is not finite");
-    }
+    requireWithin(key + ".hair_length", s.hair_length, Strip::kMinHairLength, Strip::kMaxHairLength);
+    requireWithin(key + ".width", s.width, Strip::kMinWidth, Strip::kMaxWidth);
+    requireWithin(key + ".thickness_margin", s.thickness_margin, 0.0, Strip::kMaxThicknessMargin);
+    const float channels[4] = {s.color.r, s.color.g, s.color.b, s.color.a};
+    for (int c = 0; c < 4; ++c)
+      requireWithin(key + ".color[" + std::to_string(c) + "]", channels[c], 0.0, 1.0);
+    for (std::size_t p = 0; p < s.points.size(); ++p)
+      requireCoordinates(key + ".points[" + std::to_string(p) + "]", s.points[p]);
     for (int c = 0; c < s.columns; ++c) {
       for (int r = 1; r < s.rows; ++r) {
         const double d = (s.point(r, c) - s.point(r - 1, c)).norm();

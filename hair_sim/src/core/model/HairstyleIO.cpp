@@ -10,10 +10,8 @@ namespace hair_sim {
 
 namespace {
 
-/// Sanity bounds (head frame, m): hair is at most 10 m long (hair_length) on a head; far larger numbers are
-/// typos, and beyond 2^21 spring radii the simulator's spring grid overflows (found by fuzz_yaml).
-constexpr double kMaxCoordinate = 100.0;
-constexpr double kMaxScalpRadius = 10.0;
+constexpr double kMaxCoordinate = Hairstyle::kMaxCoordinate;
+constexpr double kMaxScalpRadius = Hairstyle::kMaxScalpRadius;
 
 Rgba readColor(const YamlReader& strip) {
   const YamlReader c = strip.child("color");
@@ -60,9 +58,9 @@ Hairstyle loadHairstyle(const std::string& path) {
     s.name = y.getString("name", "strip" + std::to_string(i));
     s.columns = y.getInt("columns", Strip::kMinColumns, Strip::kMaxColumns);
     s.rows = y.getInt("rows", Strip::kMinRows, Strip::kMaxRows);
-    s.hair_length = y.getDouble("hair_length", 1e-3, 10.0);
-    s.width = y.getDouble("width", 1e-4, 1.0);
-    s.thickness_margin = y.getDouble("thickness_margin", 0.0, 0.1, s.thickness_margin);
+    s.hair_length = y.getDouble("hair_length", Strip::kMinHairLength, Strip::kMaxHairLength);
+    s.width = y.getDouble("width", Strip::kMinWidth, Strip::kMaxWidth);
+    s.thickness_margin = y.getDouble("thickness_margin", 0.0, Strip::kMaxThicknessMargin, s.thickness_margin);
     if (y.has("color")) s.color = readColor(y);
     const YamlReader pts = y.child("points");
     pts.requireSequence();
@@ -80,6 +78,8 @@ Hairstyle loadHairstyle(const std::string& path) {
     }
     style.strips.push_back(std::move(s));
   }
+  // The checks above name the line; validate repeats them for hairstyles made in code, and adds those
+  // across points and strips (segment lengths, roots on the scalp, a strip given twice).
   style.validate(path);
   return style;
 }

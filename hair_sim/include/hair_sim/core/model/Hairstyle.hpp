@@ -9,13 +9,22 @@
 namespace hair_sim {
 
 struct Hairstyle {
+  /// Sanity bounds (head frame, m): hair is at most 10 m long on a head, so far larger numbers are typos,
+  /// and beyond 2^21 spring radii the simulator's spring grid overflows (found by fuzz_yaml).
+  static constexpr double kMaxCoordinate = 100.0;
+  static constexpr double kMaxScalpRadius = 10.0;
+
   /// Roots must lie on this ellipsoid (head frame).
   Ellipsoid scalp;
   std::vector<Strip> strips;
 
   int controlPointCount() const;
-  /// Checks sizes, finiteness, distinct consecutive points and that roots lie on the scalp within
-  /// root_tolerance (m). Throws std::invalid_argument: "<source>: strips[i].<key>: <problem>".
+  /// Checks what every user of a hairstyle relies on, however it was made (the loader, hair_sim_generate,
+  /// code): the scalp's radii in (0, kMaxScalpRadius] and its center within +-kMaxCoordinate; each strip's
+  /// grid within Strip's limits, its hair_length, width and thickness_margin within Strip's ranges, its
+  /// colour channels in [0, 1], its points finite and within +-kMaxCoordinate, consecutive points of a column
+  /// at least 1e-4 m apart, its roots on the scalp within root_tolerance (m), and no strip given twice.
+  /// Throws std::invalid_argument: "<source>: strips[i].<key>: <problem>" (or "<source>: scalp.<key>: ...").
   void validate(const std::string& source, double root_tolerance = 2e-3) const;
 };
 

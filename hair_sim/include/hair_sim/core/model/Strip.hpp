@@ -15,6 +15,12 @@ struct Strip {
   /// The largest grid the hairstyle loader takes (and hair_sim_generate makes).
   static constexpr int kMaxColumns = 64;
   static constexpr int kMaxRows = 256;
+  /// The ranges Hairstyle::validate (and so the loader, the generator and the Simulator) takes (m).
+  static constexpr double kMinHairLength = 1e-3;
+  static constexpr double kMaxHairLength = 10.0;
+  static constexpr double kMinWidth = 1e-4;
+  static constexpr double kMaxWidth = 1.0;
+  static constexpr double kMaxThicknessMargin = 0.1;
 
   std::string name;
   int columns = 2;
