@@ -84,9 +84,9 @@ TEST(HairstyleTest, EveryMalformedKeyIsNamedWithItsValue) {
       {"radii: [0.1, 0.1, 0.1]", "radii: [0.1, 0.1]", "scalp.radii", "[0.1, 0.1]"},
       {"[0, 0.01, 0.25]]", "[0, 0.01]]", "strips[0].points[7]", "[0, 0.01]"},
       {"[0, 0.01, 0.25]]", "[0, 0.01, nan]]", "strips[0].points[7][2]", "nan"},
-      {"[0, 0.01, 0.25]]", "[0, 0.01, 0.2]]", "strips[0].points[7]", "segment length"},
+      {"[0, 0.01, 0.25]]", "[0, 0.01, 0.2]]", "strips[0].points[7] (line 12)", "segment length"},
       {", [0, 0.01, 0.25]]", "]", "strips[0].points", "7 points"},
-      {"[[0, -0.01, 0.0994987437]", "[[0, -0.01, 0.2]", "strips[0].points[0]", "off the scalp"},
+      {"[[0, -0.01, 0.0994987437]", "[[0, -0.01, 0.2]", "strips[0].points[0] (line 11)", "off the scalp"},
       {"    width: 0.02\n", "    width: 0.02\n    lenght: 3\n", "strips[0].lenght", "unknown key"},
       {"format_version: 1", "format_version: 2", "format_version", "2"},
       // Found by fuzz_yaml: far coordinates overflowed the simulator's spring grid (undefined behaviour).

@@ -20,25 +20,66 @@ std::string vecString(const Vec3& v) {
   return "[" + formatDouble(v.x()) + ", " + formatDouble(v.y()) + ", " + formatDouble(v.z()) + "]";
 }
 
-/// "<key>: <value> is outside [lo, hi]" unless lo <= value <= hi (NaN is outside).
-void requireWithin(const std::string& key, double value, double lo, double hi) {
-  if (!(value >= lo && value <= hi))
-    throw std::invalid_argument(key + ": " + formatDouble(value) + " is outside [" + formatDouble(lo) + ", " +
-                                formatDouble(hi) + "]");
+/// "<value> is outside [lo, hi]" unless lo <= value <= hi (NaN is outside), else "".
+std::string outside(double value, double lo, double hi) {
+  if (value >= lo && value <= hi) return "";
+  return formatDouble(value) + " is outside [" + formatDouble(lo) + ", " + formatDouble(hi) + "]";
 }
 
-/// "<key>: <vec> is not finite" or "... is beyond +-100 m of the head frame's origin".
-void requireCoordinates(const std::string& key, const Vec3& p) {
-  if (!p.allFinite()) throw std::invalid_argument(key + ": " + vecString(p) + " is not finite");
-  if (!(p.cwiseAbs().maxCoeff() <= Hairstyle::kMaxCoordinate))
-    throw std::invalid_argument(key + ": " + vecString(p) + " has a coordinate beyond +-" +
-                                formatDouble(Hairstyle::kMaxCoordinate) + " m of the head frame's origin");
+/// "<vec> is not finite" or "... has a coordinate beyond +-100 m of the head frame's origin", else "".
+std::string badCoordinates(const Vec3& p) {
+  if (!p.allFinite()) return vecString(p) + " is not finite";
+  if (p.cwiseAbs().maxCoeff() <= Hairstyle::kMaxCoordinate) return "";
+  return vecString(p) + " has a coordinate beyond +-" + formatDouble(Hairstyle::kMaxCoordinate) +
+         " m of the head frame's origin";
 }
 
 }  // namespace
 
+Hairstyle::StripProblem Hairstyle::checkStrip(const Strip& s, double root_tolerance) const {
+  const auto range = [](int lo, int hi) {
+    return "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  };
+  if (s.columns < Strip::kMinColumns || s.columns > Strip::kMaxColumns)
+    return {"columns", -1,
+            std::to_string(s.columns) + " is outside " + range(Strip::kMinColumns, Strip::kMaxColumns)};
+  if (s.rows < Strip::kMinRows || s.rows > Strip::kMaxRows)
+    return {"rows", -1, std::to_string(s.rows) + " is outside " + range(Strip::kMinRows, Strip::kMaxRows)};
+  if (static_cast<int>(s.points.size()) != s.pointCount())
+    return {"points", -1,
+            std::to_string(s.points.size()) +
+                " points given, columns x rows = " + std::to_string(s.pointCount())};
+  std::string m;
+  if (!(m = outside(s.hair_length, Strip::kMinHairLength, Strip::kMaxHairLength)).empty())
+    return {"hair_length", -1, m};
+  if (!(m = outside(s.width, Strip::kMinWidth, Strip::kMaxWidth)).empty()) return {"width", -1, m};
+  if (!(m = outside(s.thickness_margin, 0.0, Strip::kMaxThicknessMargin)).empty())
+    return {"thickness_margin", -1, m};
+  const float channels[4] = {s.color.r, s.color.g, s.color.b, s.color.a};
+  for (int c = 0; c < 4; ++c)
+    if (!(m = outside(channels[c], 0.0, 1.0)).empty()) return {"color", c, m};
+  for (std::size_t p = 0; p < s.points.size(); ++p)
+    if (!(m = badCoordinates(s.points[p])).empty()) return {"points", static_cast<int>(p), m};
+  for (int c = 0; c < s.columns; ++c) {
+    for (int r = 1; r < s.rows; ++r) {
+      const double d = (s.point(r, c) - s.point(r - 1, c)).norm();
+      if (d < 1e-4)
+        return {"points", s.index(r, c),
+                "segment length " + formatDouble(d) + " m to the point above is below 1e-4 m"};
+    }
+    const Vec3& root = s.point(0, c);
+    const double off = (root - scalp.radialProjection(root)).norm();
+    if (off > root_tolerance)
+      return {"points", c,
+              "root " + vecString(root) + " is " + formatDouble(off) + " m off the scalp (tolerance " +
+                  formatDouble(root_tolerance) + " m)"};
+  }
+  return {};
+}
+
 void Hairstyle::validate(const std::string& source, double root_tolerance) const {
-  requireCoordinates(source + ": scalp.center", scalp.center());
+  const std::string center = badCoordinates(scalp.center());
+  if (!center.empty()) throw std::invalid_argument(source + ": scalp.center: " + center);
   for (int a = 0; a < 3; ++a) {
     if (!(scalp.radii()[a] > 0.0 && scalp.radii()[a] <= kMaxScalpRadius))
       throw std::invalid_argument(source + ": scalp.radii: every radius must be in (0, " +
@@ -46,45 +87,11 @@ void Hairstyle::validate(const std::string& source, double root_tolerance) const
   }
   if (strips.empty()) throw std::invalid_argument(source + ": strips: the hairstyle has no strips");
   for (std::size_t i = 0; i < strips.size(); ++i) {
-    const Strip& s = strips[i];
-    const std::string key = source + ": strips[" + std::to_string(i) + "]";
-    if (s.columns < Strip::kMinColumns || s.columns > Strip::kMaxColumns)
-      throw std::invalid_argument(key + ".columns: " + std::to_string(s.columns) + " is outside [" +
-                                  std::to_string(Strip::kMinColumns) + ", " +
-                                  std::to_string(Strip::kMaxColumns) + "]");
-    if (s.rows < Strip::kMinRows || s.rows > Strip::kMaxRows)
-      throw std::invalid_argument(key + ".rows: " + std::to_string(s.rows) + " is outside [" +
-                                  std::to_string(Strip::kMinRows) + ", " + std::to_string(Strip::kMaxRows) +
-                                  "]");
-    if (static_cast<int>(s.points.size()) != s.pointCount()) {
-      throw std::invalid_argument(key + ".points: " + std::to_string(s.points.size()) +
-                                  " points given, columns x rows = " + std::to_string(s.pointCount()));
-    }
-    requireWithin(key + ".hair_length", s.hair_length, Strip::kMinHairLength, Strip::kMaxHairLength);
-    requireWithin(key + ".width", s.width, Strip::kMinWidth, Strip::kMaxWidth);
-    requireWithin(key + ".thickness_margin", s.thickness_margin, 0.0, Strip::kMaxThicknessMargin);
-    const float channels[4] = {s.color.r, s.color.g, s.color.b, s.color.a};
-    for (int c = 0; c < 4; ++c)
-      requireWithin(key + ".color[" + std::to_string(c) + "]", channels[c], 0.0, 1.0);
-    for (std::size_t p = 0; p < s.points.size(); ++p)
-      requireCoordinates(key + ".points[" + std::to_string(p) + "]", s.points[p]);
-    for (int c = 0; c < s.columns; ++c) {
-      for (int r = 1; r < s.rows; ++r) {
-        const double d = (s.point(r, c) - s.point(r - 1, c)).norm();
-        if (d < 1e-4) {
-          throw std::invalid_argument(key + ".points[" + std::to_string(s.index(r, c)) +
-                                      "]: segment length " + formatDouble(d) +
-                                      " m to the point above is below 1e-4 m");
-        }
-      }
-      const Vec3& root = s.point(0, c);
-      const double off = (root - scalp.radialProjection(root)).norm();
-      if (off > root_tolerance) {
-        throw std::invalid_argument(key + ".points[" + std::to_string(c) + "]: root " + vecString(root) +
-                                    " is " + formatDouble(off) + " m off the scalp (tolerance " +
-                                    formatDouble(root_tolerance) + " m)");
-      }
-    }
+    const StripProblem problem = checkStrip(strips[i], root_tolerance);
+    if (problem.key.empty()) continue;
+    throw std::invalid_argument(source + ": strips[" + std::to_string(i) + "]." + problem.key +
+                                (problem.item >= 0 ? "[" + std::to_string(problem.item) + "]" : "") + ": " +
+                                problem.message);
   }
   // A strip given twice (a copy and paste): its points would all share cells with the other's, and the
   // springs' neighbour search scans a cell's points for each of its points (20,000 copies of one strip took

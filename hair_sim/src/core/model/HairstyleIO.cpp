@@ -76,6 +76,12 @@ Hairstyle loadHairstyle(const std::string& path) {
         throw pts.at(p).error("", "every coordinate must be within +-" + formatDouble(kMaxCoordinate) +
                                       " m of the head frame's origin");
     }
+    // validate's checks of one strip (segment lengths, roots on the scalp), here to name the line.
+    const Hairstyle::StripProblem problem = style.checkStrip(s);
+    if (!problem.key.empty()) {
+      if (problem.key == "points" && problem.item >= 0) throw pts.at(problem.item).error("", problem.message);
+      throw y.error(problem.key, problem.message);
+    }
     style.strips.push_back(std::move(s));
   }
   // The checks above name the line; validate repeats them for hairstyles made in code, and adds those

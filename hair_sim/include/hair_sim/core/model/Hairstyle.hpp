@@ -18,7 +18,18 @@ struct Hairstyle {
   Ellipsoid scalp;
   std::vector<Strip> strips;
 
+  /// One strip's first problem (checkStrip): the strip's key ("hair_length", "points", ...), the item of a
+  /// sequence key (a point, a colour channel) or -1, and what is wrong. An empty key: no problem.
+  struct StripProblem {
+    std::string key;
+    int item = -1;
+    std::string message;
+  };
+
   int controlPointCount() const;
+  /// The checks of validate that concern one strip alone, against this hairstyle's scalp (the loader calls it
+  /// as it reads each strip, to name the problem's line).
+  StripProblem checkStrip(const Strip& strip, double root_tolerance = 2e-3) const;
   /// Checks what every user of a hairstyle relies on, however it was made (the loader, hair_sim_generate,
   /// code): the scalp's radii in (0, kMaxScalpRadius] and its center within +-kMaxCoordinate; each strip's
   /// grid within Strip's limits, its hair_length, width and thickness_margin within Strip's ranges, its
