@@ -285,6 +285,33 @@ TEST(OfflineRunnerTest, CommandStopsAtTheFirstFailedCsvWriteAndRemovesTheFiles) 
   EXPECT_FALSE(exists(poses));
 }
 
+TEST(OfflineRunnerTest, CommandStoppedByASignalRemovesItsIncompleteOutputs) {
+  // Ctrl-C (SIGINT) or SIGTERM in the middle of a 60 s scenario: the run stops between substeps, says
+  // where, removes its incomplete CSV and PLY files and the folder it made, and exits 128 + the signal.
+  for (const char* signal : {"INT", "TERM"}) {
+    const std::string csv = test::tempPath(std::string("stopped_") + signal + ".csv");
+    const std::string mesh = test::tempPath(std::string("stopped_mesh_") + signal);
+    const Command c =
+        shell(kBin + kConfigArg + " --scenario " + shortScenario("stopped.yaml", 60.0) + " --out " + csv +
+              " --mesh-out " + mesh + " 2>&1 >/dev/null & pid=$!; for i in $(seq 200); do [ -e " + mesh +
+              "/frame_00003.ply ] && break; sleep 0.05; done; kill -" + signal +
+              " $pid; wait $pid; echo status=$?");
+    const int expected = std::string(signal) == "INT" ? 130 : 143;
+    EXPECT_NE(c.out.find("status=" + std::to_string(expected)), std::string::npos) << signal << ": " << c.out;
+    EXPECT_NE(c.out.find(std::string("hair_sim_offline: ") +
+                         (std::string(signal) == "INT" ? "Interrupt" : "Terminated") + " at t = "),
+              std::string::npos)
+        << c.out;
+    EXPECT_NE(
+        c.out.find(" s of the scenario's 60 s: the run stopped, and its incomplete outputs are removed"),
+        std::string::npos)
+        << c.out;
+    EXPECT_NE(c.out.find("removed the incomplete " + csv), std::string::npos) << c.out;
+    EXPECT_FALSE(exists(csv));
+    EXPECT_FALSE(exists(mesh));
+  }
+}
+
 TEST(OfflineRunnerTest, CommandRefusedRunLeavesTheOutputsUntouched) {
   const std::string csv = test::writeTemp("refused.csv", "old\n"),
                     poses = test::tempPath("refused_poses.csv");

@@ -62,6 +62,12 @@ std::vector<Iso3> OfflineRunner::bodyFrames(const Iso3& head_pose) const {
   return frames;
 }
 
+RunInterrupted::RunInterrupted(int signal_number, double reached)
+    : std::runtime_error("interrupted by signal " + std::to_string(signal_number) +
+                         " at t = " + formatDouble(reached) + " s"),
+      signal(signal_number),
+      t(reached) {}
+
 RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_frame,
                               const RunOptions& options) {
   const double dt = config_.physics.substep;
@@ -82,6 +88,8 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
     const double t_frame = static_cast<double>(f) / scenario_.output_rate;
     const auto start = std::chrono::steady_clock::now();
     while (static_cast<double>(n + 1) * dt <= t_frame + 1e-9) {
+      if (options.interrupted && *options.interrupted != 0)
+        throw RunInterrupted(*options.interrupted, static_cast<double>(n) * dt);
       ++n;
       const double t = static_cast<double>(n) * dt;
       StepInputs in;
@@ -127,6 +135,8 @@ RunSummary OfflineRunner::run(const std::function<void(const OutputFrame&)>& on_
       frame.points_world = &world;
       frame.simulator = &simulator_;
       frame.meshes = meshes.get();
+      if (options.interrupted && *options.interrupted != 0)
+        throw RunInterrupted(*options.interrupted, static_cast<double>(n) * dt);
       on_frame(frame);
     }
     ++summary.output_frames;

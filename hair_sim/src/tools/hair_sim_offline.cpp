@@ -16,6 +16,7 @@
 
 #include <sys/stat.h>
 #include <climits>
+#include <csignal>
 #include <cstdlib>
 
 #include "hair_sim/core/geometry/PlyWriter.hpp"
@@ -61,7 +62,8 @@ const char* kUsage =
     "The last line on stdout is a JSON summary (steps, control_points, sim_seconds, wall_seconds,\n"
     "ns_per_control_point_update, ...). Exit status 0 on success, 1 on a bad file or value, a failed\n"
     "write or a non-finite result, 2 on bad usage. Every input is checked before any output is opened;\n"
-    "when writing fails mid-run, the incomplete output files of the run are removed.\n";
+    "when writing fails mid-run, or Ctrl-C (SIGINT) or SIGTERM stops it, the incomplete output files of\n"
+    "the run are removed (exit status 130 or 143).\n";
 
 /// A progress bar on stderr: only when stderr is a terminal, and only once the run has taken a
 /// second (short runs stay quiet); redrawn at most ten times a second.
@@ -146,6 +148,12 @@ std::string cannotWriteFolder(const std::string& given) {
   if (errno != ENOENT) return std::strerror(errno);
   return access(parentFolder(dir).c_str(), W_OK | X_OK) == 0 ? "" : std::strerror(errno);
 }
+
+/// The signal (SIGINT, SIGTERM) that asked the run to stop, 0 while none did; the runner reads it between
+/// substeps, so that the incomplete outputs are removed before the program ends.
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void onStopSignal(int signal_number) { g_interrupted = signal_number; }
 
 /// A failed write: names the file and the reason (errno of the failed call).
 [[noreturn]] void writeFailed(const std::string& path) {
@@ -276,6 +284,7 @@ int main(int argc, char** argv) {
   std::FILE* poses = nullptr;
   std::unique_ptr<hair_sim::BagWriter> bag;
   PartialOutputs partial;
+  double scenario_duration = 0.0;
   auto closeQuietly = [&] {
     if (out) std::fclose(out);
     if (poses) std::fclose(poses);
@@ -286,6 +295,7 @@ int main(int argc, char** argv) {
     hair_sim::SimConfig config = hair_sim::loadSimConfig(config_path);
     hair_sim::Hairstyle style = hair_sim::loadHairstyle(config.hairstyle_file);
     hair_sim::Scenario scenario = hair_sim::Scenario::load(scenario_path);
+    scenario_duration = scenario.duration;
     const int unknown_frame = hair_sim::OfflineRunner::bodyInUnknownFrame(config);
     if (unknown_frame >= 0) {
       const hair_sim::Body& b = config.bodies[static_cast<std::size_t>(unknown_frame)];
@@ -342,6 +352,12 @@ int main(int argc, char** argv) {
     }
     Progress progress(scenario.duration);
     long frame_number = 0;
+    options.interrupted = &g_interrupted;
+    struct sigaction stop {};
+    stop.sa_handler = onStopSignal;
+    sigemptyset(&stop.sa_mask);
+    sigaction(SIGINT, &stop, nullptr);
+    sigaction(SIGTERM, &stop, nullptr);
     const hair_sim::RunSummary summary = runner.run(
         [&](const hair_sim::OutputFrame& frame) {
           progress.update(frame.t);
@@ -406,6 +422,13 @@ int main(int argc, char** argv) {
                 << " s): the outputs hold the initial state only\n";
     std::cout << summary.toJson() << std::endl;
     return summary.all_finite ? 0 : 1;
+  } catch (const hair_sim::RunInterrupted& e) {
+    closeQuietly();
+    std::cerr << "\nhair_sim_offline: " << strsignal(e.signal) << " at t = " << hair_sim::formatDouble(e.t)
+              << " s of the scenario's " << hair_sim::formatDouble(scenario_duration)
+              << " s: the run stopped, and its incomplete outputs are removed\n";
+    partial.removeAll();
+    return 128 + e.signal;
   } catch (const std::exception& e) {
     closeQuietly();
     std::cerr << "hair_sim_offline: error: " << e.what() << "\n";

@@ -1,7 +1,9 @@
 #pragma once
 /// Runs the core without ROS: a config, a hairstyle and a scenario in, control points per output
 /// frame out. hair_sim_offline is a thin command-line front end to this.
+#include <csignal>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -53,6 +55,17 @@ struct RunOptions {
   /// rigidly (HeadMotionEstimator::setTeleportLimits); the node's ~teleport_distance, ~teleport_angle.
   double teleport_distance = 0.5;
   double teleport_angle = 1.0;
+  /// Read before every substep and every output frame (a signal handler may set it): when it is not 0, run
+  /// stops there and throws RunInterrupted.
+  const volatile std::sig_atomic_t* interrupted = nullptr;
+};
+
+/// Thrown by OfflineRunner::run when RunOptions::interrupted is set: `signal` is its value, `t` the time (s)
+/// the run had reached.
+struct RunInterrupted : std::runtime_error {
+  RunInterrupted(int signal_number, double reached);
+  int signal;
+  double t;
 };
 
 class OfflineRunner {
