@@ -424,7 +424,10 @@ int main(int argc, char** argv) {
     return summary.all_finite ? 0 : 1;
   } catch (const hair_sim::RunInterrupted& e) {
     closeQuietly();
-    std::cerr << "\nhair_sim_offline: " << strsignal(e.signal) << " at t = " << hair_sim::formatDouble(e.t)
+    char reached[32];
+    std::snprintf(reached, sizeof(reached), "%.3f", e.t);
+    std::cerr << (isatty(STDERR_FILENO) == 1 ? "\n" : "")  // below the progress bar
+              << "hair_sim_offline: " << strsignal(e.signal) << " at t = " << reached
               << " s of the scenario's " << hair_sim::formatDouble(scenario_duration)
               << " s: the run stopped, and its incomplete outputs are removed\n";
     partial.removeAll();
