@@ -51,6 +51,13 @@ TEST(YamlReaderTest, BadFilesAreNamed) {
   const std::string dir = file.substr(0, file.find_last_of('/'));
   m = test::errorOf([&] { YamlReader::loadFile(dir); });
   EXPECT_EQ(m, dir + ": is a directory, not a file");
+  // Nested 1,500 deep: yaml-cpp's own message was "bad file".
+  const std::string deep =
+      test::writeTemp("deep.yaml", "a: " + std::string(1500, '[') + std::string(1500, ']') + "\n");
+  m = test::errorOf([&] { YamlReader::loadFile(deep); });
+  EXPECT_EQ(m, deep +
+                   " (line 1): YAML nested too deep for the parser (sequences and maps within each other; "
+                   "hair_sim's files need 5 levels at most)");
 }
 
 TEST(YamlReaderTest, AKeyGivenTwiceIsNamedWithBothLines) {

@@ -9,6 +9,8 @@
 #include <system_error>
 #include <vector>
 
+#include <yaml-cpp/depthguard.h>
+
 namespace hair_sim {
 
 YamlReader YamlReader::loadFile(const std::string& path) {
@@ -21,6 +23,11 @@ YamlReader YamlReader::loadFile(const std::string& path) {
     root = YAML::LoadFile(path);
   } catch (const YAML::BadFile&) {
     throw std::invalid_argument(path + ": cannot open the file");
+  } catch (const YAML::DeepRecursion& e) {  // yaml-cpp's own message is "bad file"; its depth() counts calls
+    throw std::invalid_argument(
+        path + " (line " + std::to_string(e.mark.line + 1) +
+        "): YAML nested too deep for the parser (sequences and maps within each other; "
+        "hair_sim's files need 5 levels at most)");
   } catch (const YAML::ParserException& e) {
     throw std::invalid_argument(path + " (line " + std::to_string(e.mark.line + 1) +
                                 "): YAML syntax error: " + e.msg);
