@@ -27,6 +27,8 @@ in one message stamped now) and, in this order on the same node, sends:
                            the head moves 0.59 m (over teleport_distance): the hair goes rigidly, as in test_g
   test_q_body_jump         world -> neck jumps 1.0 m down between two messages: held until the new one (the
                            neck jumps within one substep, not swept through the hair over 10 ms), said
+  test_r_body_turn         world -> neck turns NECK_ROLL about x: under teleport_angle and no move of the frame's
+                           origin, but the neck body, 1.45 m up in its frame, swings 0.86 m: held, said at the body
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
 given with each case), hair_state keeps coming at publish_rate (at least 80 % of it, stale period included),
@@ -90,6 +92,9 @@ STALL_RATE_MAX = 1.2  # x publish_rate after the stall (the tf backlog stepped o
 GAP = 12.0  # s without head tf: beyond the tf cache (10 s)
 STEP_FRACTION = 0.5  # of 240 substeps per second: the hair steps on (not frozen at the old pose)
 ODOM_YAW = 0.6  # rad: odom's turn in test_o (the node's ~teleport_angle is 1.0 rad)
+NECK_ROLL = 0.6  # rad: the neck frame's turn in test_r
+NECK_CENTER = (-0.01, 0.0, 1.45)  # m: the neck body's center in its frame (test/data/robustness_config.yaml)
+NECK_RADIUS = 0.09  # m: its largest radius
 
 
 def quat_yaw(yaw):
@@ -111,7 +116,8 @@ class RobustnessChecks(unittest.TestCase):
     quaternion = (0.0, 0.0, 0.0, 1.0)
     broadcasting = True
     neck_broadcasting = True  # world -> neck, the frame of the neck body in the test's config
-    neck = (0.0, 0.0, 0.0)  # where the broadcaster puts neck in the world (no rotation)
+    neck = (0.0, 0.0, 0.0)  # where the broadcaster puts neck in the world
+    neck_q = (0.0, 0.0, 0.0, 1.0)  # and how it turns it
     last_stamp = None  # newest head tf stamp sent
     root_offsets = None  # roots in head coordinates, from the first states
     last_step = None  # hair_state.step of the last state watched
@@ -165,6 +171,7 @@ class RobustnessChecks(unittest.TestCase):
         while not cls.stop.is_set() and not rospy.is_shutdown():
             with cls.lock:
                 go, position, q, odom, neck_at = cls.broadcasting, tuple(cls.head), cls.quaternion, cls.odom, cls.neck
+                neck_q = cls.neck_q
                 odom_q = quat_yaw(cls.odom_yaw)
                 neck = go and cls.neck_broadcasting
             if go:
@@ -173,7 +180,7 @@ class RobustnessChecks(unittest.TestCase):
                 above.child_frame_id = 'odom'
                 cls.send(cls.transform(stamp, position, q), above)
             if neck:
-                t = cls.transform(stamp, neck_at, (0.0, 0.0, 0.0, 1.0), parent=cls.world_frame)
+                t = cls.transform(stamp, neck_at, neck_q, parent=cls.world_frame)
                 t.child_frame_id = 'neck'
                 cls.tf_pub.publish(TFMessage(transforms=[t]))
             time.sleep(period)
@@ -507,7 +514,23 @@ class RobustnessChecks(unittest.TestCase):
         since = self.log_index()
         with self.lock:
             type(self).neck = (0.0, 0.0, -TELEPORT)
-        said = self.expect_log(since, 'jumped 1.000 m and 0.000 rad between two messages')
+        said = self.expect_log(since, "jumped 1.000 m at body 'neck' and 0.000 rad between two messages")
+        self.assertIn('tf %s -> neck from ' % self.world_frame, said)
+        self.steps_on(self.watch(WATCH, head, yaw))
+
+    def test_r_body_turn(self):
+        yaw = TELEPORT_YAW + self.odom_yaw
+        head = tuple(a + b for a, b in zip(self.odom, rotate_yaw(self.head, self.odom_yaw)))
+        # A turn by NECK_ROLL about x moves the body's center by the chord 2 sin(roll / 2) times its distance
+        # from the x axis, and its surface by up to the same chord of its largest radius more.
+        chord = 2.0 * math.sin(0.5 * NECK_ROLL)
+        reach = chord * (math.hypot(NECK_CENTER[1], NECK_CENTER[2]) + NECK_RADIUS)
+        self.assertGreater(reach, 0.5, 'the test needs the body to move more than teleport_distance')
+        since = self.log_index()
+        with self.lock:
+            type(self).neck_q = (math.sin(0.5 * NECK_ROLL), 0.0, 0.0, math.cos(0.5 * NECK_ROLL))
+        said = self.expect_log(since, "jumped %.3f m at body 'neck' and %.3f rad between two messages" %
+                               (reach, NECK_ROLL))
         self.assertIn('tf %s -> neck from ' % self.world_frame, said)
         self.steps_on(self.watch(WATCH, head, yaw))
 

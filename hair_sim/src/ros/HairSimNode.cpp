@@ -519,6 +519,16 @@ void HairSimNode::noteParent(const std::string& child, const std::string& parent
   above_head_ = hair_frames_;  // the head's climb alone
   above_head_.erase(config_.head_frame);
   for (const Body& body : config_.bodies) climb(body.frame);
+  bodies_below_.clear();
+  for (std::size_t b = 0; b < config_.bodies.size(); ++b) {
+    std::set<std::string> seen;  // a loop in the tree ends the climb
+    for (std::string frame = config_.bodies[b].frame; seen.insert(frame).second;) {
+      bodies_below_[frame].push_back(b);
+      const auto up = parent_frame_.find(frame);
+      if (up == parent_frame_.end()) break;
+      frame = up->second;
+    }
+  }
 }
 
 void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority) {
@@ -541,8 +551,35 @@ void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const
     } catch (const tf2::TransformException&) {  // the head not yet in tf: the frame's origin
     }
   }
-  const double distance = (b * at - a * at).norm();
+  double distance = (b * at - a * at).norm();
   const double angle = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
+  // For another frame with bodies in or below it (not the head's, nor one above it: there the hold must
+  // agree with the head's teleport test, made at the head's origin), how far a body's surface can move: its
+  // center's move plus the chord the turn gives its largest radius. A turn under teleport_angle may sweep a
+  // large or distant body more than teleport_distance.
+  std::string where = above_head ? " at the head" : "";
+  const auto bodies = bodies_below_.find(t.child_frame_id);
+  if (!above_head && t.child_frame_id != config_.head_frame && bodies != bodies_below_.end()) {
+    for (const std::size_t i : bodies->second) {
+      const Body& body = config_.bodies[i];
+      Iso3 body_in_frame = Iso3::Identity();
+      if (body.frame != t.child_frame_id) {
+        try {
+          body_in_frame =
+              tf2::transformToEigen(tf_buffer_.lookupTransform(t.child_frame_id, body.frame, ros::Time(0)));
+        } catch (const tf2::TransformException&) {  // not yet in tf: this body is not measured
+          continue;
+        }
+      }
+      const Vec3 center = body_in_frame * body.shape.center();
+      const double reach =
+          (b * center - a * center).norm() + 2.0 * std::sin(0.5 * angle) * body.shape.radii().maxCoeff();
+      if (reach >= distance) {  // (a pure shift moves the body as far as the origin: said at the body)
+        distance = reach;
+        where = " at body '" + body.name + "'";
+      }
+    }
+  }
   if (distance <= teleport_distance_ && angle <= teleport_angle_) return;
   // tf would interpolate the jump over the time between the two messages, a whip of the hair across the
   // scene; held at the old pose until just before the new one, the frame jumps within one substep. For
@@ -563,7 +600,7 @@ void HairSimNode::holdBeforeJump(const geometry_msgs::TransformStamped& t, const
                 "(teleport_distance %.3f m, teleport_angle %.3f rad): held until the new one, so the frames "
                 "below it jump within one substep",
                 t.header.frame_id.c_str(), t.child_frame_id.c_str(), authority.c_str(), distance,
-                above_head ? " at the head" : "", angle, teleport_distance_, teleport_angle_);
+                where.c_str(), angle, teleport_distance_, teleport_angle_);
   warnThrottled("jump of " + t.child_frame_id, text);
 }
 

@@ -61,13 +61,15 @@ class HairSimNode {
   void onSubscriberConnect();
   /// A transform of the head frame, of a body's frame or of a frame above either (map -> odom, say) that
   /// jumps beyond the teleport limits from the previous one of its child frame (for a frame above the head,
-  /// the distance the head moves): the previous one is put in
+  /// the distance the head moves; for another frame with bodies in or below it, how far the farthest
+  /// point of a body can move, bounded by its center's move plus the turn times its largest radius): the
+  /// previous one is put in
   /// the buffer again just before it, so that the jump falls within one substep (a teleport of the head, or
   /// a body that jumps) instead of a sweep that tf would interpolate between the two messages. Said for any
   /// frame but the head's own (whose teleport the step reports).
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
-  /// Records `parent` as `child`'s parent frame (parent_frame_); when that is news, hair_frames_ and
-  /// above_head_ again.
+  /// Records `parent` as `child`'s parent frame (parent_frame_); when that is news, hair_frames_,
+  /// above_head_ and bodies_below_ again.
   void noteParent(const std::string& child, const std::string& parent);
   /// Stamp order of a non-static transform against the newest one of its child frame: false (with a
   /// throttled warning naming frame and stamps) for a repeated stamp or one older than the tf cache, which
@@ -134,6 +136,8 @@ class HairSimNode {
   /// The head frame, the bodies' frames and every frame above them in parent_frame_ (holdBeforeJump's)
   std::set<std::string> hair_frames_;
   std::set<std::string> above_head_;  ///< the frames above the head frame in parent_frame_ (noteParent's)
+  /// frame -> the bodies (config_.bodies' indices) in it or below it in parent_frame_ (noteParent's)
+  std::map<std::string, std::vector<std::size_t>> bodies_below_;
   std::map<std::string, ros::Time> newest_tf_stamp_;  ///< child frame -> newest stamp taken
   int strands_per_strip_ = 6;
 
