@@ -272,21 +272,6 @@ bool HairSimNode::bodyFrameAt(std::size_t b, const ros::Time& t, Iso3& frame) {
   return true;
 }
 
-Vec3 HairSimNode::windAt(double t) const {
-  const double s = t < wind_start_    ? 0.0
-                   : wind_ramp_ > 0.0 ? std::min(1.0, (t - wind_start_) / wind_ramp_)
-                                      : 1.0;
-  Vec3 w = (1.0 - s) * wind_from_ + s * wind_to_;
-  if (turbulence_ > 0.0) {
-    // Smooth, deterministic fluctuation: incommensurate sines per axis, relative to the mean speed.
-    const double speed = w.norm();
-    const Vec3 noise(std::sin(2.1 * t) + 0.5 * std::sin(5.3 * t + 1.0),
-                     std::sin(1.7 * t + 2.0) + 0.5 * std::sin(4.1 * t), 0.5 * std::sin(2.9 * t + 0.5));
-    w += turbulence_ * speed * noise / 1.5;
-  }
-  return w;
-}
-
 void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
   guarded("the Wind callback", [&] {
     const std::string problem = checkWind(*msg);
@@ -316,11 +301,7 @@ void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
     double start = started_ ? sim_time_.toSec() : now;
     if (!msg->header.stamp.isZero() && std::abs(msg->header.stamp.toSec() - now) <= max_tf_age_)
       start = msg->header.stamp.toSec();
-    wind_from_ = windAt(start);
-    wind_to_ = world;
-    wind_start_ = start;
-    wind_ramp_ = msg->ramp_time;
-    turbulence_ = msg->turbulence;
+    wind_.set(start, world, msg->turbulence, msg->ramp_time);
   });
 }
 
@@ -624,7 +605,7 @@ void HairSimNode::stepTo(const ros::Time& t, const HeadState& head, const std::v
   StepInputs in;
   in.head = head;
   const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
-  in.wind = wind_scale_ * (windAt(t.toSec()) + events.wind);
+  in.wind = wind_scale_ * (wind_.at(t.toSec()) + events.wind);
   in.turbulence = &events.turbulence;
   in.gravity = &events.gravity;
   in.body_frames = body_frames;
@@ -691,8 +672,7 @@ void HairSimNode::update(bool from_tf) {
       events_.clear();
     }
     // A wind ramp started at a time now in the future would hold the wind before it: the last wind blows.
-    wind_from_ = wind_to_;
-    wind_start_ = 0.0;
+    wind_.settle();
     snapSimTime(target);
     next_publish_ = ros::Time();
     started_ = true;
