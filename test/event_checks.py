@@ -12,8 +12,9 @@
       `trigger` with a shake (0.4 rad, 1 Hz, 3 s, ease 0.25 s): accepted and passed on to head_driver;
       the head's yaw in tf reaches 0.4 rad (within 0.02) either way.
   test_d_bad_events_are_rejected
-      `trigger` with a NaN wind, an unknown type and a gust peak above 4 x its mean: each rejected with
-      the field named; the node keeps publishing.
+      `trigger` with a NaN wind, an unknown type, a gust peak above 4 x its mean, a nod at an infinite
+      frequency and a wind over before it arrived: each rejected with the field named, in the reply and
+      in a WARN of the node on /rosout; the node keeps publishing.
   test_e_wind_ramp_starts_at_its_stamp
       Once the hair is still, a Wind (4 m/s along +x, no ramp) stamped 0.3 s ahead (within the node's
       max_tf_age, 0.5 s): no hair_state stamped before it has the mean tip moved 0.5 mm, the first that
@@ -37,6 +38,7 @@ import tf2_ros
 from geometry_msgs.msg import Vector3
 from hair_sim_msgs.msg import HairEvent, HairState, Wind
 from hair_sim_msgs.srv import Trigger
+from rosgraph_msgs.msg import Log
 
 NAME = 'event_checks'
 
@@ -61,6 +63,8 @@ class EventChecks(unittest.TestCase):
         cls.tf_buffer = tf2_ros.Buffer()
         cls.tf_listener = tf2_ros.TransformListener(cls.tf_buffer)
         cls.sub = rospy.Subscriber('hair_state', HairState, cls.on_state, queue_size=50)
+        cls.logs = []  # (level, text) of the node's /rosout messages
+        rospy.Subscriber('/rosout', Log, cls.on_log, queue_size=1000)
         cls.events = rospy.Publisher('events', HairEvent, queue_size=10)
         cls.wind = rospy.Publisher('wind', Wind, queue_size=10)
         rospy.wait_for_service('trigger', timeout=30.0)
@@ -74,6 +78,26 @@ class EventChecks(unittest.TestCase):
     def on_state(cls, msg):
         with cls.lock:
             cls.states.append((msg.header.stamp.to_sec(), mean_tip(msg)))
+
+    @classmethod
+    def on_log(cls, msg):
+        if msg.name == '/hair_sim':
+            with cls.lock:
+                cls.logs.append((msg.level, msg.msg))
+
+    def log_index(self):
+        with self.lock:
+            return len(self.logs)
+
+    def expect_log(self, since, text, level=Log.WARN, timeout=3.0):
+        """A /rosout message of the node at `level` containing `text` after log index `since`."""
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            with self.lock:
+                if any(lv == level and text in msg for lv, msg in self.logs[since:]):
+                    return
+            time.sleep(0.05)
+        self.fail("no /rosout message of /hair_sim containing '%s'" % text)
 
     @classmethod
     def snapshot(cls):
@@ -158,9 +182,12 @@ class EventChecks(unittest.TestCase):
             (past, 'ended before it arrived'),
         ]
         for event, named in cases:
+            since = self.log_index()
             reply = self.trigger(event)
-            self.assertFalse(reply.accepted, event.type)
+            self.assertFalse(reply.accepted, '%s: %s' % (event.type, reply.message))
             self.assertIn(named, reply.message)
+            # The node says it too (a WARN naming the field and value), not only the caller.
+            self.expect_log(since, named)
         count = len(self.snapshot())
         time.sleep(1.0)
         self.assertGreater(len(self.snapshot()), count + 10, 'the node stopped publishing')

@@ -373,6 +373,8 @@ bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
     if (!eventFromMsg(request.event, Vec3::Zero(), start.toSec(), &event, &problem)) {
       response.accepted = false;
       response.message = problem;
+      warnThrottled("event",
+                    "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + problem);
       return true;
     }
     hair_sim_msgs::HairEvent forward = request.event;
@@ -384,7 +386,11 @@ bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
     return true;
   }
   response.accepted = schedule(request.event, &response.message);
-  if (response.accepted) ROS_INFO("hair_sim: trigger: %s", response.message.c_str());
+  if (response.accepted)
+    ROS_INFO("hair_sim: trigger: %s", response.message.c_str());
+  else
+    warnThrottled("event",
+                  "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + response.message);
   return true;
 }
 
