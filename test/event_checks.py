@@ -13,8 +13,9 @@
       the head's yaw in tf reaches 0.4 rad (within 0.02) either way.
   test_d_bad_events_are_rejected
       `trigger` with a NaN wind, an unknown type, a gust peak above 4 x its mean, a nod at an infinite
-      frequency and a wind over before it arrived: each rejected with the field named, in the reply and
-      in a WARN of the node on /rosout; the node keeps publishing.
+      frequency, a wind over before it arrived and one (until replaced) stamped 10 s back, which still air
+      scheduled now replaces before it arrived: each rejected with the field named, in the reply and in a
+      WARN of the node on /rosout; the node keeps publishing.
   test_e_wind_ramp_starts_at_its_stamp
       Once the hair is still, a Wind (4 m/s along +x, no ramp) stamped 0.3 s ahead (within the node's
       max_tf_age, 0.5 s): no hair_state stamped before it has the mean tip moved 0.5 mm, the first that
@@ -174,12 +175,18 @@ class EventChecks(unittest.TestCase):
         # Stamped 10 s back for 2 s: over before it arrived (else "scheduled", then dropped unseen).
         past = HairEvent(type='wind', vector=Vector3(3.0, 0.0, 0.0), duration=2.0)
         past.header.stamp = rospy.Time.now() - rospy.Duration(10.0)
+        # Until replaced, stamped 10 s back, behind still air scheduled now: replaced before it arrived.
+        calm = self.trigger(HairEvent(type='wind'))
+        self.assertTrue(calm.accepted, calm.message)
+        replaced = HairEvent(type='wind', vector=Vector3(3.0, 0.0, 0.0))
+        replaced.header.stamp = rospy.Time.now() - rospy.Duration(10.0)
         cases = [
             (HairEvent(type='wind', vector=Vector3(float('nan'), 0.0, 0.0)), 'velocity: [nan'),
             (HairEvent(type='breeze'), "type: 'breeze'"),
             (HairEvent(type='wind_gust', vector=Vector3(1.0, 0.0, 0.0), peak=9.0, period=1.0), 'peak: 9'),
             (HairEvent(type='nod', amplitude=0.2, frequency=float('inf')), 'frequency: inf'),
             (past, 'ended before it arrived'),
+            (replaced, 'replaced by a later wind event'),
         ]
         for event, named in cases:
             since = self.log_index()

@@ -124,6 +124,46 @@ TEST(EventScheduleTest, EnvelopeEasesInAndOutAndHandsOver) {
   EXPECT_NEAR((h.sample(7.0, kG).gravity - side.vector).norm(), 0.0, 1e-12);
 }
 
+// The node refuses an event that would be over before the hair's time gets to it: endIfAdded is the end
+// the event would have once added (as end() gives then), without adding it.
+TEST(EventScheduleTest, EndIfAddedIsTheEndOnceAdded) {
+  EventSchedule s;
+  Event calm;
+  calm.type = EventType::Wind;
+  calm.start = 10.0;
+  calm.ease = 0.5;
+  s.add(calm);
+  Event early = calm;  // until replaced, but calm (at 10 s) replaces it
+  early.start = 1.0;
+  early.vector = Vec3(3.0, 0.0, 0.0);
+  Event gravity;  // another type: not replaced by a wind
+  gravity.type = EventType::Gravity;
+  gravity.start = 1.0;
+  Event later = calm;
+  later.start = 12.0;
+  Event timed = early;
+  timed.duration = 2.0;
+  EXPECT_EQ(s.endIfAdded(early), 10.5);
+  EXPECT_TRUE(std::isinf(s.endIfAdded(gravity)));
+  EXPECT_TRUE(std::isinf(s.endIfAdded(later)));
+  EXPECT_EQ(s.endIfAdded(timed), 3.0);
+  Event same = calm;  // the same start: added after calm, so nothing replaces it
+  EXPECT_TRUE(std::isinf(s.endIfAdded(same)));
+  for (const Event& e : {early, gravity, later, timed, same}) {
+    EventSchedule t = s;
+    const double expected = t.endIfAdded(e);
+    t.add(e);
+    bool found = false;
+    for (std::size_t i = 0; i < t.size(); ++i)
+      if (t.event(i).start == e.start && t.event(i).type == e.type && t.event(i).vector == e.vector &&
+          t.event(i).duration == e.duration && (i + 1 == t.size() || t.event(i + 1).start > e.start)) {
+        EXPECT_EQ(t.end(i), expected) << eventTypeName(e.type) << " at " << e.start;
+        found = true;
+      }
+    EXPECT_TRUE(found);
+  }
+}
+
 TEST(EventScheduleTest, TurbulenceHasItsIntensityAndNoDivergence) {
   Event e;
   e.type = EventType::Turbulence;

@@ -335,11 +335,16 @@ bool HairSimNode::schedule(const hair_sim_msgs::HairEvent& msg, std::string* mes
                std::to_string(kMaxScheduledEvents) + "): wait until some have ended";
     return false;
   }
-  // Over before the hair's time gets to it: it would be dropped unseen at the next update.
+  // Over before the hair's time gets to it (its duration past, or, until replaced, replaced by a later
+  // event of its type already scheduled): it would be dropped unseen at the next update.
   const double now = started_ ? sim_time_.toSec() : ros::Time::now().toSec();
-  if (event.duration > 0.0 && event.start + event.duration < now) {
-    *message = "header.stamp: " + formatDouble(event.start) + " s + duration " +
-               formatDouble(event.duration) + " s ended before it arrived (t = " + formatDouble(now) + " s)";
+  const double end = events_.endIfAdded(event);
+  if (end < now) {
+    *message = "header.stamp: " + formatDouble(event.start) + " s " +
+               (event.duration > 0.0 ? "+ duration " + formatDouble(event.duration) + " s ended"
+                                     : "until replaced: replaced by a later " + msg.type +
+                                           " event by t = " + formatDouble(end) + " s,") +
+               " before it arrived (t = " + formatDouble(now) + " s)";
     return false;
   }
   events_.add(event);

@@ -81,6 +81,15 @@ double EventSchedule::end(std::size_t i) const {
   return std::numeric_limits<double>::infinity();
 }
 
+double EventSchedule::endIfAdded(const Event& event) const {
+  if (event.duration > 0.0) return event.start + event.duration;
+  // add() puts it after the events that start at or before it.
+  for (const Entry& entry : entries_)
+    if (entry.event.start > event.start && entry.event.type == event.type)
+      return entry.event.start + entry.event.ease;
+  return std::numeric_limits<double>::infinity();
+}
+
 void EventSchedule::dropEndedBefore(double t) {
   std::vector<Entry> kept;
   for (std::size_t i = 0; i < entries_.size(); ++i)

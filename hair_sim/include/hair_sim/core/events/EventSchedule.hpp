@@ -54,6 +54,10 @@ class EventSchedule {
   /// When event i stops acting (s): start + duration, or for duration 0 the end of the ease of the
   /// next event of its type (infinity if there is none).
   double end(std::size_t i) const;
+  /// When `event` would stop acting were it added now (as end() would give after add): start + duration,
+  /// or for duration 0 the end of the ease of the first event of its type that starts later (infinity if
+  /// there is none).
+  double endIfAdded(const Event& event) const;
   /// Wind, gravity (from `gravity`, the configured one) and head rotation at time t (s).
   EventSample sample(double t, const Vec3& gravity) const;
 
