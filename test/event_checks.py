@@ -15,7 +15,8 @@
       `trigger` with a NaN wind, an unknown type, a gust peak above 4 x its mean, a nod at an infinite
       frequency, a wind over before it arrived and one (until replaced) stamped 10 s back, which still air
       scheduled now replaces before it arrived: each rejected with the field named, in the reply and in a
-      WARN of the node on /rosout; the node keeps publishing.
+      WARN of the node on /rosout. A bad nod and a bad shake published at once on `events`: head_driver
+      warns of each, naming the field. The node keeps publishing.
   test_e_wind_ramp_starts_at_its_stamp
       Once the hair is still, a Wind (4 m/s along +x, no ramp) stamped 0.3 s ahead (within the node's
       max_tf_age, 0.5 s): no hair_state stamped before it has the mean tip moved 0.5 mm, the first that
@@ -64,7 +65,7 @@ class EventChecks(unittest.TestCase):
         cls.tf_buffer = tf2_ros.Buffer()
         cls.tf_listener = tf2_ros.TransformListener(cls.tf_buffer)
         cls.sub = rospy.Subscriber('hair_state', HairState, cls.on_state, queue_size=50)
-        cls.logs = []  # (level, text) of the node's /rosout messages
+        cls.logs = []  # (node, level, text) of the /rosout messages
         rospy.Subscriber('/rosout', Log, cls.on_log, queue_size=1000)
         cls.events = rospy.Publisher('events', HairEvent, queue_size=10)
         cls.wind = rospy.Publisher('wind', Wind, queue_size=10)
@@ -82,23 +83,22 @@ class EventChecks(unittest.TestCase):
 
     @classmethod
     def on_log(cls, msg):
-        if msg.name == '/hair_sim':
-            with cls.lock:
-                cls.logs.append((msg.level, msg.msg))
+        with cls.lock:
+            cls.logs.append((msg.name, msg.level, msg.msg))
 
     def log_index(self):
         with self.lock:
             return len(self.logs)
 
-    def expect_log(self, since, text, level=Log.WARN, timeout=3.0):
-        """A /rosout message of the node at `level` containing `text` after log index `since`."""
+    def expect_log(self, since, text, level=Log.WARN, timeout=3.0, node='/hair_sim'):
+        """A /rosout message of `node` at `level` containing `text` after log index `since`."""
         deadline = time.time() + timeout
         while time.time() < deadline:
             with self.lock:
-                if any(lv == level and text in msg for lv, msg in self.logs[since:]):
+                if any(n == node and lv == level and text in msg for n, lv, msg in self.logs[since:]):
                     return
             time.sleep(0.05)
-        self.fail("no /rosout message of /hair_sim containing '%s'" % text)
+        self.fail("no /rosout message of %s containing '%s'" % (node, text))
 
     @classmethod
     def snapshot(cls):
@@ -195,6 +195,12 @@ class EventChecks(unittest.TestCase):
             self.assertIn(named, reply.message)
             # The node says it too (a WARN naming the field and value), not only the caller.
             self.expect_log(since, named)
+        # Bad head motions on the topic are head_driver's to name: two different ones at once, each named.
+        since = self.log_index()
+        self.events.publish(HairEvent(type='nod', amplitude=5.0, frequency=1.0))
+        self.events.publish(HairEvent(type='shake', amplitude=0.2, frequency=50.0))
+        self.expect_log(since, 'amplitude: 5', node='/head_driver')
+        self.expect_log(since, 'frequency: 50', node='/head_driver')
         count = len(self.snapshot())
         time.sleep(1.0)
         self.assertGreater(len(self.snapshot()), count + 10, 'the node stopped publishing')
