@@ -27,6 +27,9 @@ in one message stamped now) and, in this order on the same node, sends:
                            the head moves 0.59 m (over teleport_distance): the hair goes rigidly, as in test_g
   test_q_body_jump         world -> neck jumps 1.0 m down between two messages: held until the new one (the
                            neck jumps within one substep, not swept through the hair over 10 ms), said
+  test_r_head_motion_without_head_driver
+                           a shake through `trigger` with no head_driver running: refused (no head driver
+                           subscribes to /events), not reported as passed on
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
 given with each case), hair_state keeps coming at publish_rate (at least 80 % of it, stale period included),
@@ -538,6 +541,16 @@ class RobustnessChecks(unittest.TestCase):
         code, _, pid = ServerProxy(uri).getPid('/' + NAME)
         self.assertEqual(code, 1, 'getPid of %s failed' % self.node)
         return int(pid)
+
+    def test_r_head_motion_without_head_driver(self):
+        # No head_driver in this launch: a shake through `trigger` would go out on `events` to no one.
+        rospy.wait_for_service('trigger', timeout=10.0)
+        since = self.log_index()
+        reply = rospy.ServiceProxy('trigger', Trigger)(
+            HairEvent(type='shake', duration=3.0, ease=0.3, amplitude=0.5, frequency=2.0))
+        self.assertFalse(reply.accepted, reply.message)
+        self.assertIn('no head driver subscribes to /events', reply.message)
+        self.expect_log(since, 'no head driver subscribes to /events')
 
     def test_z_no_errors(self):
         with self.lock:

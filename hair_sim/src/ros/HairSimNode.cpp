@@ -382,6 +382,16 @@ bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
                     "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + problem);
       return true;
     }
+    // This node's own subscription to the topic counts as one: with no other, no head driver would get it.
+    if (events_pub_.getNumSubscribers() < 2) {
+      response.accepted = false;
+      response.message = "no head driver subscribes to " + events_pub_.getTopic() +
+                         ": nothing would move the head (" + request.event.type +
+                         " is a head motion; start head_driver, or move the head frame in tf)";
+      warnThrottled(
+          "event", "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + response.message);
+      return true;
+    }
     hair_sim_msgs::HairEvent forward = request.event;
     forward.header.stamp = start;
     events_pub_.publish(forward);
