@@ -26,8 +26,12 @@
   test_f_repeated_turbulent_wind_stays_bounded
       Once the hair is still, the same Wind (3 m/s along +x, turbulence 0.3, ramp 1 s) sent at 30 Hz for 3 s,
       as a teleoperation stack repeats its command: the mean tip stays within 12 cm of where it was (7 cm
-      measured) and rises less than 4 cm. (Each command used to start its ramp from the turbulent wind of that instant, which
-      the turbulence then fluctuated again: the wind grew without bound, the tips flew 0.2 m up and about.)
+      measured) and rises less than 4 cm. (Each command used to start its ramp from the turbulent wind of
+      that instant, which the turbulence then fluctuated again: the wind grew without bound, the tips flew
+      0.28 m, 0.23 m up.)
+  test_g_overlapping_turbulence_is_bounded
+      Five turbulence events of 2 s from now through `trigger`: four taken, the fifth refused (too many
+      turbulence events at once), with a WARN; hair_state keeps above 20 Hz.
 """
 import math
 import threading
@@ -255,6 +259,24 @@ class EventChecks(unittest.TestCase):
         self.assertLess(moved, 0.12)
         self.assertLess(rose, 0.04)
         self.wind.publish(Wind())
+
+    def test_g_overlapping_turbulence_is_bounded(self):
+        # Each turbulence event adds 16 plane waves to every segment's wind at every substep: at most 4 act
+        # together (256, the cap on events, slowed the hair to a quarter of real time, the outputs to 1-2 Hz).
+        for k in range(5):
+            since = self.log_index()
+            reply = self.trigger(HairEvent(type='turbulence', duration=2.0, intensity=0.01, length_scale=0.5,
+                                           time_scale=1.0, seed=k + 1))
+            if k < 4:
+                self.assertTrue(reply.accepted, 'turbulence event %d refused: %s' % (k, reply.message))
+            else:
+                self.assertFalse(reply.accepted, 'a fifth turbulence event at once: %s' % reply.message)
+                self.assertIn('too many turbulence events at once (4 scheduled would act while it does, at most 4',
+                              reply.message)
+                self.expect_log(since, 'too many turbulence events at once')
+        count = len(self.snapshot())
+        time.sleep(1.0)
+        self.assertGreater(len(self.snapshot()), count + 20, 'hair_state slowed below 20 Hz')
 
 
 if __name__ == '__main__':

@@ -164,6 +164,55 @@ TEST(EventScheduleTest, EndIfAddedIsTheEndOnceAdded) {
   }
 }
 
+// The node bounds the turbulence events acting together (each adds 16 plane waves to every segment's wind
+// at every substep): countOverlapping counts those of the type that act while a new one would.
+TEST(EventScheduleTest, CountOverlappingCountsTheEventsOfItsTypeActingWhileItWould) {
+  EventSchedule s;
+  Event t;
+  t.type = EventType::Turbulence;
+  t.intensity = 0.1;
+  t.duration = 10.0;
+  for (int k = 0; k < 3; ++k) {  // [0, 10), [5, 15), [10, 20)
+    t.start = 5.0 * k;
+    s.add(t);
+  }
+  Event wind;  // another type: not counted
+  wind.start = 0.0;
+  s.add(wind);
+  Event probe = t;
+  probe.start = 11.0;
+  probe.duration = 1.0;
+  EXPECT_EQ(s.countOverlapping(probe), 2u);  // [5, 15) and [10, 20)
+  probe.start = 9.5;
+  EXPECT_EQ(s.countOverlapping(probe), 3u);
+  probe.start = 20.0;  // [10, 20) has ended when it starts
+  EXPECT_EQ(s.countOverlapping(probe), 0u);
+  probe.start = 0.0;
+  probe.duration = 100.0;
+  EXPECT_EQ(s.countOverlapping(probe), 3u);
+  // Until replaced: a later one of the type ends it (after its ease); it ends an earlier one likewise.
+  EventSchedule r;
+  Event steady = t;
+  steady.duration = 0.0;
+  steady.start = 0.0;
+  r.add(steady);
+  Event next = steady;
+  next.start = 4.0;
+  EXPECT_EQ(r.countOverlapping(next), 0u);  // replaces `steady` at once (no ease)
+  next.ease = 1.0;
+  EXPECT_EQ(r.countOverlapping(next), 1u);  // both act during its ease
+  next.start = 0.0;
+  next.ease = 0.0;
+  EXPECT_EQ(r.countOverlapping(next), 0u);
+  r.add(Event(next));
+  Event timed = t;
+  timed.start = 2.0;
+  timed.duration = 1.0;
+  EXPECT_EQ(r.countOverlapping(timed), 0u);  // any later one of its type replaces the steady one
+  timed.ease = 0.5;
+  EXPECT_EQ(r.countOverlapping(timed), 1u);  // during its ease
+}
+
 TEST(EventScheduleTest, TurbulenceHasItsIntensityAndNoDivergence) {
   Event e;
   e.type = EventType::Turbulence;

@@ -335,6 +335,16 @@ bool HairSimNode::schedule(const hair_sim_msgs::HairEvent& msg, std::string* mes
                std::to_string(kMaxScheduledEvents) + "): wait until some have ended";
     return false;
   }
+  if (event.type == EventType::Turbulence) {
+    const std::size_t overlapping = events_.countOverlapping(event);
+    if (overlapping >= kMaxOverlappingTurbulence) {
+      *message = "too many turbulence events at once (" + std::to_string(overlapping) +
+                 " scheduled would act while it does, at most " + std::to_string(kMaxOverlappingTurbulence) +
+                 " together: each adds " + std::to_string(EventSchedule::kTurbulenceWaves) +
+                 " plane waves to every segment's wind at every substep)";
+      return false;
+    }
+  }
   // Over before the hair's time gets to it (its duration past, or, until replaced, replaced by a later
   // event of its type already scheduled): it would be dropped unseen at the next update.
   const double now = started_ ? sim_time_.toSec() : ros::Time::now().toSec();

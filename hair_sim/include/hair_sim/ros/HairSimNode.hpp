@@ -38,6 +38,11 @@ class HairSimNode {
   HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
   /// Events scheduled and not yet ended, at most (more are refused, named, until some have ended).
   static constexpr std::size_t kMaxScheduledEvents = 256;
+  /// Turbulence events acting at one time, at most: each adds EventSchedule::kTurbulenceWaves plane waves
+  /// to the wind of every segment at every substep (at the default 100 strips on the 2-core build machine,
+  /// 0.19 ms per substep each: 4 took 1.0 ms of the 4.17 ms budget, 8 took 2.2 ms, and 256 of them, within
+  /// kMaxScheduledEvents, slowed the hair to a quarter of real time and the outputs to 1-2 Hz).
+  static constexpr std::size_t kMaxOverlappingTurbulence = 4;
 
  private:
   void readParameters();

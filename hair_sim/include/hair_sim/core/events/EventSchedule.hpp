@@ -58,6 +58,9 @@ class EventSchedule {
   /// or for duration 0 the end of the ease of the first event of its type that starts later (infinity if
   /// there is none).
   double endIfAdded(const Event& event) const;
+  /// The events of `event`'s type that act at some time while it would (from its start to endIfAdded), as
+  /// they stand: at least the most that would act together with it at any one time.
+  std::size_t countOverlapping(const Event& event) const;
   /// Wind, gravity (from `gravity`, the configured one) and head rotation at time t (s).
   EventSample sample(double t, const Vec3& gravity) const;
 
