@@ -88,7 +88,9 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(n
   state_pub_ = nh_.advertise<hair_sim_msgs::HairState>("hair_state", 2, connected);
   wind_sub_ = nh_.subscribe("wind", 10, &HairSimNode::onWind, this);
   events_pub_ = nh_.advertise<hair_sim_msgs::HairEvent>("events", 10);
-  events_sub_ = nh_.subscribe("events", 50, &HairSimNode::onEvent, this);
+  // A burst of events (a scenario sent at once) waits in the queue rather than being dropped unseen by
+  // roscpp while an update runs: room for the cap and its refusals (each named) several times over.
+  events_sub_ = nh_.subscribe("events", 4 * kMaxScheduledEvents, &HairSimNode::onEvent, this);
   reset_srv_ = nh_.advertiseService("reset", &HairSimNode::onReset, this);
   trigger_srv_ = nh_.advertiseService("trigger", &HairSimNode::onTrigger, this);
   // tf on the node's own queue (no listener thread): a head pose triggers the step and the output.

@@ -232,7 +232,9 @@ class HeadDriver {
   HeadDriver(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(nh), pnh_(private_nh) {
     readParameters();
     timer_ = nh_.createTimer(ros::Duration(1.0 / rate_), &HeadDriver::onTimer, this);
-    events_sub_ = nh_.subscribe("events", 50, &HeadDriver::onEvent, this);
+    // Room for a burst of events (a scenario sent at once), as hair_sim_node has: roscpp drops unseen what
+    // does not fit in the queue.
+    events_sub_ = nh_.subscribe("events", 1024, &HeadDriver::onEvent, this);
   }
 
  private:
