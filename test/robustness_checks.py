@@ -29,7 +29,7 @@ in one message stamped now) and, in this order on the same node, sends:
                            neck jumps within one substep, not swept through the hair over 10 ms), said
   test_r_head_motion_without_head_driver
                            a shake through `trigger` with no head_driver running: refused (no head driver
-                           subscribes to /events), not reported as passed on
+                           subscribes to /events), not reported as passed on; a nod on `events`: warned
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
 given with each case), hair_state keeps coming at publish_rate (at least 80 % of it, stale period included),
@@ -551,6 +551,13 @@ class RobustnessChecks(unittest.TestCase):
         self.assertFalse(reply.accepted, reply.message)
         self.assertIn('no head driver subscribes to /events', reply.message)
         self.expect_log(since, 'no head driver subscribes to /events')
+        # The same on the topic: nobody would take it, and the node says so.
+        events = rospy.Publisher('events', HairEvent, queue_size=10)
+        wait_until(lambda: events.get_num_connections() >= 1, 5.0, 'a connection to hair_sim on events',
+                   self.fail, lambda: not rospy.is_shutdown())
+        since = self.log_index()
+        events.publish(HairEvent(type='nod', duration=2.0, amplitude=0.2, frequency=1.0))
+        self.expect_log(since, 'a nod HairEvent on /events: no head driver subscribes to it')
 
     def test_z_no_errors(self):
         with self.lock:

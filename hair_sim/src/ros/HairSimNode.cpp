@@ -373,7 +373,13 @@ void HairSimNode::onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg) {
       return;
     }
     EventType type;
-    if (parseEventType(msg->type, &type) && isHeadMotion(type)) return;  // the head driver's
+    if (parseEventType(msg->type, &type) && isHeadMotion(type)) {  // the head driver's
+      // This node's own subscription to the topic counts as one: with no other, nothing takes it.
+      if (events_pub_.getNumSubscribers() < 2)
+        warnThrottled("event", "hair_sim: a " + msg->type + " HairEvent on " + events_sub_.getTopic() +
+                                   ": no head driver subscribes to it: nothing will move the head");
+      return;
+    }
     warnThrottled("event", "hair_sim: ignored a HairEvent (" + msg->type + "): " + message);
   });
 }
