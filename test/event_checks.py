@@ -36,6 +36,9 @@
       200 wind events and 200 nods an hour ahead published at once on `events` while hair_sim_node and
       head_driver are stopped (SIGSTOP, then SIGCONT): all 200 scheduled by each (the INFO for each), none
       dropped by a subscriber queue.
+  test_i_wind_scale_scales_turbulence_events
+      With ~wind_scale 0 (dynamic_reconfigure), a turbulence event of 3 m/s for 1.5 s: the mean tip moves
+      less than 0.5 mm (the turbulence field is scaled like the rest of the wind); ~wind_scale back to 1.
 """
 import math
 import os
@@ -45,6 +48,7 @@ import time
 import unittest
 from xmlrpc.client import ServerProxy
 
+import dynamic_reconfigure.client
 import rosgraph
 import rospy
 import rostest
@@ -324,6 +328,24 @@ class EventChecks(unittest.TestCase):
                 break
         self.assertEqual(scheduled, {'/hair_sim': 200, '/head_driver': 200},
                          'events scheduled of 200 published at once to each')
+    def test_i_wind_scale_scales_turbulence_events(self):
+        # ~wind_scale multiplies all the wind: at 0, a turbulence event (3 m/s RMS) moves the hair no more than
+        # a wind event does (before, the turbulence field was not scaled: the tips moved 6-7 cm).
+        client = dynamic_reconfigure.client.Client('/hair_sim', timeout=10.0)
+        client.update_configuration({'wind_scale': 0.0})
+        try:
+            before = self.wait_still()
+            reply = self.trigger(HairEvent(type='turbulence', duration=1.5, intensity=3.0, length_scale=0.5,
+                                           time_scale=1.0, seed=2))
+            self.assertTrue(reply.accepted, reply.message)
+            sent = rospy.Time.now().to_sec()
+            states = self.wait_until(sent + 1.5)
+            moved = max(math.dist(tip, before) for t, tip in states if t > sent)
+            rospy.loginfo('%s: turbulence of 3 m/s at wind_scale 0: mean tip moved %.4f m', NAME, moved)
+            self.assertLess(moved, 5e-4)
+        finally:
+            client.update_configuration({'wind_scale': 1.0})
+
 
 if __name__ == '__main__':
     rostest.rosrun('hair_sim', NAME, EventChecks)

@@ -256,6 +256,22 @@ TEST(EventScheduleTest, TurbulenceHasItsIntensityAndNoDivergence) {
   EXPECT_LT((s.sample(2.0, kG).turbulence.at(p) - s.sample(2.001, kG).turbulence.at(p)).norm(), 0.05);
 }
 
+// hair_sim_node's ~wind_scale multiplies all the wind: the uniform one and the turbulence field.
+TEST(EventScheduleTest, TurbulenceFieldScales) {
+  EventSchedule s;
+  Event e;
+  e.type = EventType::Turbulence;
+  e.intensity = 2.0;
+  s.add(e);
+  WindField field = s.sample(1.0, kG).turbulence;
+  const Vec3 p(0.1, -0.2, 1.5), v = field.at(p);
+  ASSERT_GT(v.norm(), 0.0);
+  field.scale(0.5);
+  EXPECT_NEAR((field.at(p) - 0.5 * v).norm(), 0.0, 1e-15);
+  field.scale(0.0);
+  EXPECT_EQ(field.at(p), Vec3::Zero());
+}
+
 TEST(EventScheduleTest, HeadMotionsTurnByTheirAmplitudeAtTheirFrequencyAndCompose) {
   Event shake;
   shake.type = EventType::Shake;

@@ -643,8 +643,9 @@ bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const 
 void HairSimNode::stepTo(const ros::Time& t, const HeadState& head, const std::vector<Iso3>& body_frames) {
   StepInputs in;
   in.head = head;
-  const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
+  EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
   in.wind = wind_scale_ * (wind_.at(t.toSec()) + events.wind);
+  if (wind_scale_ != 1.0) events.turbulence.scale(wind_scale_);  // all the wind, turbulence events too
   in.turbulence = &events.turbulence;
   in.gravity = &events.gravity;
   in.body_frames = body_frames;

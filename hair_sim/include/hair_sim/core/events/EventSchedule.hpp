@@ -15,6 +15,10 @@ class WindField {
   bool empty() const { return modes_.empty(); }
   /// Air velocity of the turbulence at a world point (m/s).
   Vec3 at(const Vec3& p) const;
+  /// Multiplies the field by `factor` (hair_sim_node's ~wind_scale, as for the uniform wind).
+  void scale(double factor) {
+    for (Wave& w : modes_) w.amplitude *= factor;
+  }
 
  private:
   friend class EventSchedule;
