@@ -27,7 +27,10 @@ in one message stamped now) and, in this order on the same node, sends:
                            the head moves 0.59 m (over teleport_distance): the hair goes rigidly, as in test_g
   test_q_body_jump         world -> neck jumps 1.0 m down between two messages: held until the new one (the
                            neck jumps within one substep, not swept through the hair over 10 ms), said
-  test_r_body_turn         world -> neck turns NECK_ROLL about x: under teleport_angle and no move of the frame's
+  test_r_head_motion_without_head_driver
+                           a shake through `trigger` with no head_driver running: refused (no head driver
+                           subscribes to /events), not reported as passed on; a nod on `events`: warned
+  test_s_body_turn         world -> neck turns NECK_ROLL about x: under teleport_angle and no move of the frame's
                            origin, but the neck body, 1.45 m up in its frame, swings 0.86 m: held, said at the body
 
 and checks after each: the node's /rosout has a WARN naming the field or the fault (the text expected is
@@ -518,7 +521,7 @@ class RobustnessChecks(unittest.TestCase):
         self.assertIn('tf %s -> neck from ' % self.world_frame, said)
         self.steps_on(self.watch(WATCH, head, yaw))
 
-    def test_r_body_turn(self):
+    def test_s_body_turn(self):
         yaw = TELEPORT_YAW + self.odom_yaw
         head = tuple(a + b for a, b in zip(self.odom, rotate_yaw(self.head, self.odom_yaw)))
         # A turn by NECK_ROLL about x moves the body's center by the chord 2 sin(roll / 2) times its distance
@@ -561,6 +564,23 @@ class RobustnessChecks(unittest.TestCase):
         code, _, pid = ServerProxy(uri).getPid('/' + NAME)
         self.assertEqual(code, 1, 'getPid of %s failed' % self.node)
         return int(pid)
+
+    def test_r_head_motion_without_head_driver(self):
+        # No head_driver in this launch: a shake through `trigger` would go out on `events` to no one.
+        rospy.wait_for_service('trigger', timeout=10.0)
+        since = self.log_index()
+        reply = rospy.ServiceProxy('trigger', Trigger)(
+            HairEvent(type='shake', duration=3.0, ease=0.3, amplitude=0.5, frequency=2.0))
+        self.assertFalse(reply.accepted, reply.message)
+        self.assertIn('no head driver subscribes to /events', reply.message)
+        self.expect_log(since, 'no head driver subscribes to /events')
+        # The same on the topic: nobody would take it, and the node says so.
+        events = rospy.Publisher('events', HairEvent, queue_size=10)
+        wait_until(lambda: events.get_num_connections() >= 1, 5.0, 'a connection to hair_sim on events',
+                   self.fail, lambda: not rospy.is_shutdown())
+        since = self.log_index()
+        events.publish(HairEvent(type='nod', duration=2.0, amplitude=0.2, frequency=1.0))
+        self.expect_log(since, 'a nod HairEvent on /events: no head driver subscribes to it')
 
     def test_z_no_errors(self):
         with self.lock:

@@ -124,6 +124,95 @@ TEST(EventScheduleTest, EnvelopeEasesInAndOutAndHandsOver) {
   EXPECT_NEAR((h.sample(7.0, kG).gravity - side.vector).norm(), 0.0, 1e-12);
 }
 
+// The node refuses an event that would be over before the hair's time gets to it: endIfAdded is the end
+// the event would have once added (as end() gives then), without adding it.
+TEST(EventScheduleTest, EndIfAddedIsTheEndOnceAdded) {
+  EventSchedule s;
+  Event calm;
+  calm.type = EventType::Wind;
+  calm.start = 10.0;
+  calm.ease = 0.5;
+  s.add(calm);
+  Event early = calm;  // until replaced, but calm (at 10 s) replaces it
+  early.start = 1.0;
+  early.vector = Vec3(3.0, 0.0, 0.0);
+  Event gravity;  // another type: not replaced by a wind
+  gravity.type = EventType::Gravity;
+  gravity.start = 1.0;
+  Event later = calm;
+  later.start = 12.0;
+  Event timed = early;
+  timed.duration = 2.0;
+  EXPECT_EQ(s.endIfAdded(early), 10.5);
+  EXPECT_TRUE(std::isinf(s.endIfAdded(gravity)));
+  EXPECT_TRUE(std::isinf(s.endIfAdded(later)));
+  EXPECT_EQ(s.endIfAdded(timed), 3.0);
+  Event same = calm;  // the same start: added after calm, so nothing replaces it
+  EXPECT_TRUE(std::isinf(s.endIfAdded(same)));
+  for (const Event& e : {early, gravity, later, timed, same}) {
+    EventSchedule t = s;
+    const double expected = t.endIfAdded(e);
+    t.add(e);
+    bool found = false;
+    for (std::size_t i = 0; i < t.size(); ++i)
+      if (t.event(i).start == e.start && t.event(i).type == e.type && t.event(i).vector == e.vector &&
+          t.event(i).duration == e.duration && (i + 1 == t.size() || t.event(i + 1).start > e.start)) {
+        EXPECT_EQ(t.end(i), expected) << eventTypeName(e.type) << " at " << e.start;
+        found = true;
+      }
+    EXPECT_TRUE(found);
+  }
+}
+
+// The node bounds the turbulence events acting together (each adds 16 plane waves to every segment's wind
+// at every substep): countOverlapping counts those of the type that act while a new one would.
+TEST(EventScheduleTest, CountOverlappingCountsTheEventsOfItsTypeActingWhileItWould) {
+  EventSchedule s;
+  Event t;
+  t.type = EventType::Turbulence;
+  t.intensity = 0.1;
+  t.duration = 10.0;
+  for (int k = 0; k < 3; ++k) {  // [0, 10), [5, 15), [10, 20)
+    t.start = 5.0 * k;
+    s.add(t);
+  }
+  Event wind;  // another type: not counted
+  wind.start = 0.0;
+  s.add(wind);
+  Event probe = t;
+  probe.start = 11.0;
+  probe.duration = 1.0;
+  EXPECT_EQ(s.countOverlapping(probe), 2u);  // [5, 15) and [10, 20)
+  probe.start = 9.5;
+  EXPECT_EQ(s.countOverlapping(probe), 3u);
+  probe.start = 20.0;  // [10, 20) has ended when it starts
+  EXPECT_EQ(s.countOverlapping(probe), 0u);
+  probe.start = 0.0;
+  probe.duration = 100.0;
+  EXPECT_EQ(s.countOverlapping(probe), 3u);
+  // Until replaced: a later one of the type ends it (after its ease); it ends an earlier one likewise.
+  EventSchedule r;
+  Event steady = t;
+  steady.duration = 0.0;
+  steady.start = 0.0;
+  r.add(steady);
+  Event next = steady;
+  next.start = 4.0;
+  EXPECT_EQ(r.countOverlapping(next), 0u);  // replaces `steady` at once (no ease)
+  next.ease = 1.0;
+  EXPECT_EQ(r.countOverlapping(next), 1u);  // both act during its ease
+  next.start = 0.0;
+  next.ease = 0.0;
+  EXPECT_EQ(r.countOverlapping(next), 0u);
+  r.add(Event(next));
+  Event timed = t;
+  timed.start = 2.0;
+  timed.duration = 1.0;
+  EXPECT_EQ(r.countOverlapping(timed), 0u);  // any later one of its type replaces the steady one
+  timed.ease = 0.5;
+  EXPECT_EQ(r.countOverlapping(timed), 1u);  // during its ease
+}
+
 TEST(EventScheduleTest, TurbulenceHasItsIntensityAndNoDivergence) {
   Event e;
   e.type = EventType::Turbulence;
@@ -165,6 +254,22 @@ TEST(EventScheduleTest, TurbulenceHasItsIntensityAndNoDivergence) {
   // Smooth in time: one millisecond changes it by far less than the intensity.
   const Vec3 p(0.1, 0.1, 1.6);
   EXPECT_LT((s.sample(2.0, kG).turbulence.at(p) - s.sample(2.001, kG).turbulence.at(p)).norm(), 0.05);
+}
+
+// hair_sim_node's ~wind_scale multiplies all the wind: the uniform one and the turbulence field.
+TEST(EventScheduleTest, TurbulenceFieldScales) {
+  EventSchedule s;
+  Event e;
+  e.type = EventType::Turbulence;
+  e.intensity = 2.0;
+  s.add(e);
+  WindField field = s.sample(1.0, kG).turbulence;
+  const Vec3 p(0.1, -0.2, 1.5), v = field.at(p);
+  ASSERT_GT(v.norm(), 0.0);
+  field.scale(0.5);
+  EXPECT_NEAR((field.at(p) - 0.5 * v).norm(), 0.0, 1e-15);
+  field.scale(0.0);
+  EXPECT_EQ(field.at(p), Vec3::Zero());
 }
 
 TEST(EventScheduleTest, HeadMotionsTurnByTheirAmplitudeAtTheirFrequencyAndCompose) {

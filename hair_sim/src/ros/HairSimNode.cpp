@@ -88,7 +88,9 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(n
   state_pub_ = nh_.advertise<hair_sim_msgs::HairState>("hair_state", 2, connected);
   wind_sub_ = nh_.subscribe("wind", 10, &HairSimNode::onWind, this);
   events_pub_ = nh_.advertise<hair_sim_msgs::HairEvent>("events", 10);
-  events_sub_ = nh_.subscribe("events", 50, &HairSimNode::onEvent, this);
+  // A burst of events (a scenario sent at once) waits in the queue rather than being dropped unseen by
+  // roscpp while an update runs: room for the cap and its refusals (each named) several times over.
+  events_sub_ = nh_.subscribe("events", 4 * kMaxScheduledEvents, &HairSimNode::onEvent, this);
   reset_srv_ = nh_.advertiseService("reset", &HairSimNode::onReset, this);
   trigger_srv_ = nh_.advertiseService("trigger", &HairSimNode::onTrigger, this);
   // tf on the node's own queue (no listener thread): a head pose triggers the step and the output.
@@ -272,21 +274,6 @@ bool HairSimNode::bodyFrameAt(std::size_t b, const ros::Time& t, Iso3& frame) {
   return true;
 }
 
-Vec3 HairSimNode::windAt(double t) const {
-  const double s = t < wind_start_    ? 0.0
-                   : wind_ramp_ > 0.0 ? std::min(1.0, (t - wind_start_) / wind_ramp_)
-                                      : 1.0;
-  Vec3 w = (1.0 - s) * wind_from_ + s * wind_to_;
-  if (turbulence_ > 0.0) {
-    // Smooth, deterministic fluctuation: incommensurate sines per axis, relative to the mean speed.
-    const double speed = w.norm();
-    const Vec3 noise(std::sin(2.1 * t) + 0.5 * std::sin(5.3 * t + 1.0),
-                     std::sin(1.7 * t + 2.0) + 0.5 * std::sin(4.1 * t), 0.5 * std::sin(2.9 * t + 0.5));
-    w += turbulence_ * speed * noise / 1.5;
-  }
-  return w;
-}
-
 void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
   guarded("the Wind callback", [&] {
     const std::string problem = checkWind(*msg);
@@ -316,11 +303,7 @@ void HairSimNode::onWind(const hair_sim_msgs::Wind::ConstPtr& msg) {
     double start = started_ ? sim_time_.toSec() : now;
     if (!msg->header.stamp.isZero() && std::abs(msg->header.stamp.toSec() - now) <= max_tf_age_)
       start = msg->header.stamp.toSec();
-    wind_from_ = windAt(start);
-    wind_to_ = world;
-    wind_start_ = start;
-    wind_ramp_ = msg->ramp_time;
-    turbulence_ = msg->turbulence;
+    wind_.set(start, world, msg->turbulence, msg->ramp_time);
   });
 }
 
@@ -354,11 +337,26 @@ bool HairSimNode::schedule(const hair_sim_msgs::HairEvent& msg, std::string* mes
                std::to_string(kMaxScheduledEvents) + "): wait until some have ended";
     return false;
   }
-  // Over before the hair's time gets to it: it would be dropped unseen at the next update.
+  if (event.type == EventType::Turbulence) {
+    const std::size_t overlapping = events_.countOverlapping(event);
+    if (overlapping >= kMaxOverlappingTurbulence) {
+      *message = "too many turbulence events at once (" + std::to_string(overlapping) +
+                 " scheduled would act while it does, at most " + std::to_string(kMaxOverlappingTurbulence) +
+                 " together: each adds " + std::to_string(EventSchedule::kTurbulenceWaves) +
+                 " plane waves to every segment's wind at every substep)";
+      return false;
+    }
+  }
+  // Over before the hair's time gets to it (its duration past, or, until replaced, replaced by a later
+  // event of its type already scheduled): it would be dropped unseen at the next update.
   const double now = started_ ? sim_time_.toSec() : ros::Time::now().toSec();
-  if (event.duration > 0.0 && event.start + event.duration < now) {
-    *message = "header.stamp: " + formatDouble(event.start) + " s + duration " +
-               formatDouble(event.duration) + " s ended before it arrived (t = " + formatDouble(now) + " s)";
+  const double end = events_.endIfAdded(event);
+  if (end < now) {
+    *message = "header.stamp: " + formatDouble(event.start) + " s " +
+               (event.duration > 0.0 ? "+ duration " + formatDouble(event.duration) + " s ended"
+                                     : "until replaced: replaced by a later " + msg.type +
+                                           " event by t = " + formatDouble(end) + " s,") +
+               " before it arrived (t = " + formatDouble(now) + " s)";
     return false;
   }
   events_.add(event);
@@ -375,7 +373,13 @@ void HairSimNode::onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg) {
       return;
     }
     EventType type;
-    if (parseEventType(msg->type, &type) && isHeadMotion(type)) return;  // the head driver's
+    if (parseEventType(msg->type, &type) && isHeadMotion(type)) {  // the head driver's
+      // This node's own subscription to the topic counts as one: with no other, nothing takes it.
+      if (events_pub_.getNumSubscribers() < 2)
+        warnThrottled("event", "hair_sim: a " + msg->type + " HairEvent on " + events_sub_.getTopic() +
+                                   ": no head driver subscribes to it: nothing will move the head");
+      return;
+    }
     warnThrottled("event", "hair_sim: ignored a HairEvent (" + msg->type + "): " + message);
   });
 }
@@ -392,6 +396,18 @@ bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
     if (!eventFromMsg(request.event, Vec3::Zero(), start.toSec(), &event, &problem)) {
       response.accepted = false;
       response.message = problem;
+      warnThrottled("event",
+                    "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + problem);
+      return true;
+    }
+    // This node's own subscription to the topic counts as one: with no other, no head driver would get it.
+    if (events_pub_.getNumSubscribers() < 2) {
+      response.accepted = false;
+      response.message = "no head driver subscribes to " + events_pub_.getTopic() +
+                         ": nothing would move the head (" + request.event.type +
+                         " is a head motion; start head_driver, or move the head frame in tf)";
+      warnThrottled(
+          "event", "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + response.message);
       return true;
     }
     hair_sim_msgs::HairEvent forward = request.event;
@@ -403,7 +419,11 @@ bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
     return true;
   }
   response.accepted = schedule(request.event, &response.message);
-  if (response.accepted) ROS_INFO("hair_sim: trigger: %s", response.message.c_str());
+  if (response.accepted)
+    ROS_INFO("hair_sim: trigger: %s", response.message.c_str());
+  else
+    warnThrottled("event",
+                  "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + response.message);
   return true;
 }
 
@@ -660,8 +680,9 @@ bool HairSimNode::acceptTfStamp(const geometry_msgs::TransformStamped& t, const 
 void HairSimNode::stepTo(const ros::Time& t, const HeadState& head, const std::vector<Iso3>& body_frames) {
   StepInputs in;
   in.head = head;
-  const EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
-  in.wind = wind_scale_ * (windAt(t.toSec()) + events.wind);
+  EventSample events = events_.sample(t.toSec(), config_.physics.gravity);
+  in.wind = wind_scale_ * (wind_.at(t.toSec()) + events.wind);
+  if (wind_scale_ != 1.0) events.turbulence.scale(wind_scale_);  // all the wind, turbulence events too
   in.turbulence = &events.turbulence;
   in.gravity = &events.gravity;
   in.body_frames = body_frames;
@@ -728,8 +749,7 @@ void HairSimNode::update(bool from_tf) {
       events_.clear();
     }
     // A wind ramp started at a time now in the future would hold the wind before it: the last wind blows.
-    wind_from_ = wind_to_;
-    wind_start_ = 0.0;
+    wind_.settle();
     snapSimTime(target);
     next_publish_ = ros::Time();
     started_ = true;

@@ -232,7 +232,9 @@ class HeadDriver {
   HeadDriver(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(nh), pnh_(private_nh) {
     readParameters();
     timer_ = nh_.createTimer(ros::Duration(1.0 / rate_), &HeadDriver::onTimer, this);
-    events_sub_ = nh_.subscribe("events", 50, &HeadDriver::onEvent, this);
+    // Room for a burst of events (a scenario sent at once), as hair_sim_node has: roscpp drops unseen what
+    // does not fit in the queue.
+    events_sub_ = nh_.subscribe("events", 1024, &HeadDriver::onEvent, this);
   }
 
  private:
@@ -389,7 +391,15 @@ class HeadDriver {
     hair_sim::Event event;
     std::string problem;
     if (!hair_sim::eventFromMsg(*msg, hair_sim::Vec3::Zero(), start.toSec(), &event, &problem)) {
-      ROS_WARN_THROTTLE(2.0, "head_driver: ignored a HairEvent (%s): %s", msg->type.c_str(), problem.c_str());
+      // The same warning again at most every 2 s, a different one at once (as hair_sim_node's): a flood
+      // of one bad event does not fill the log, and a second, different one is not hidden behind it.
+      const std::string text = "head_driver: ignored a HairEvent (" + msg->type + "): " + problem;
+      const ros::WallTime wall = ros::WallTime::now();
+      if (text != last_event_warning_ || (wall - last_event_warning_time_).toSec() >= 2.0) {
+        ROS_WARN("%s", text.c_str());
+        last_event_warning_ = text;
+        last_event_warning_time_ = wall;
+      }
       return;
     }
     events_.add(event);
@@ -455,6 +465,8 @@ class HeadDriver {
   ros::Timer timer_;
   ros::Subscriber events_sub_;
   hair_sim::EventSchedule events_;  ///< head motions, in seconds of ROS time
+  std::string last_event_warning_;  ///< the last "ignored a HairEvent" warning, and when it was given
+  ros::WallTime last_event_warning_time_;
   MotionSettings settings_;
   std::string world_frame_ = "world";
   std::string head_frame_ = "head";

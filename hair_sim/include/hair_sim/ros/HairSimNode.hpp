@@ -22,6 +22,7 @@
 
 #include "hair_sim/core/Simulator.hpp"
 #include "hair_sim/core/events/EventSchedule.hpp"
+#include "hair_sim/core/events/WindCommand.hpp"
 #include "hair_sim/core/geometry/HairMeshBuilder.hpp"
 #include "hair_sim/core/model/SimConfig.hpp"
 #include "hair_sim/ros/HairMessages.hpp"
@@ -37,6 +38,11 @@ class HairSimNode {
   HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
   /// Events scheduled and not yet ended, at most (more are refused, named, until some have ended).
   static constexpr std::size_t kMaxScheduledEvents = 256;
+  /// Turbulence events acting at one time, at most: each adds EventSchedule::kTurbulenceWaves plane waves
+  /// to the wind of every segment at every substep (at the default 100 strips on the 2-core build machine,
+  /// 0.19 ms per substep each: 4 took 1.0 ms of the 4.17 ms budget, 8 took 2.2 ms, and 256 of them, within
+  /// kMaxScheduledEvents, slowed the hair to a quarter of real time and the outputs to 1-2 Hz).
+  static constexpr std::size_t kMaxOverlappingTurbulence = 4;
 
  private:
   void readParameters();
@@ -93,7 +99,6 @@ class HairSimNode {
   /// nothing at all) and it was seen before, where it was last seen (said once, and when it is fresh again);
   /// false (wait) when it was never seen or is only behind the head.
   bool bodyFrameAt(std::size_t b, const ros::Time& t, Iso3& frame);
-  Vec3 windAt(double t) const;
   /// hair_state and hair_markers: the hair drawn with the head at `pose`, bodies at `body_frames`.
   void publishOutputs(const ros::Time& stamp, const Iso3& pose, const std::vector<Iso3>& body_frames);
   void publishBodies(const ros::Time& stamp, const std::vector<Iso3>& frames);
@@ -159,12 +164,8 @@ class HairSimNode {
   /// hair_markers, serialised straight from meshes_ within publish().
   HairMarkersView markers_view_;
 
-  // Wind: blends from wind_from_ to wind_to_ over [wind_start_, wind_start_ + wind_ramp_] (sim seconds).
-  Vec3 wind_from_ = Vec3::Zero();
-  Vec3 wind_to_ = Vec3::Zero();
-  double wind_start_ = 0.0;
-  double wind_ramp_ = 0.0;
-  double turbulence_ = 0.0;
+  // The Wind commands, timed in seconds of ROS time.
+  WindCommand wind_;
   // Events (wind, wind_gust, turbulence, gravity), timed in seconds of ROS time.
   EventSchedule events_;
 

@@ -81,6 +81,29 @@ double EventSchedule::end(std::size_t i) const {
   return std::numeric_limits<double>::infinity();
 }
 
+double EventSchedule::endIfAdded(const Event& event) const {
+  if (event.duration > 0.0) return event.start + event.duration;
+  // add() puts it after the events that start at or before it.
+  for (const Entry& entry : entries_)
+    if (entry.event.start > event.start && entry.event.type == event.type)
+      return entry.event.start + entry.event.ease;
+  return std::numeric_limits<double>::infinity();
+}
+
+std::size_t EventSchedule::countOverlapping(const Event& event) const {
+  const double from = event.start, to = endIfAdded(event);
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < entries_.size(); ++i) {
+    const Event& e = entries_[i].event;
+    if (e.type != event.type) continue;
+    // An event until replaced that starts before `event` ends at event's ease once it is added.
+    double ends = end(i);
+    if (e.duration <= 0.0 && e.start <= event.start) ends = std::min(ends, event.start + event.ease);
+    if (e.start < to && ends > from) ++n;
+  }
+  return n;
+}
+
 void EventSchedule::dropEndedBefore(double t) {
   std::vector<Entry> kept;
   for (std::size_t i = 0; i < entries_.size(); ++i)

@@ -15,6 +15,10 @@ class WindField {
   bool empty() const { return modes_.empty(); }
   /// Air velocity of the turbulence at a world point (m/s).
   Vec3 at(const Vec3& p) const;
+  /// Multiplies the field by `factor` (hair_sim_node's ~wind_scale, as for the uniform wind).
+  void scale(double factor) {
+    for (Wave& w : modes_) w.amplitude *= factor;
+  }
 
  private:
   friend class EventSchedule;
@@ -54,6 +58,13 @@ class EventSchedule {
   /// When event i stops acting (s): start + duration, or for duration 0 the end of the ease of the
   /// next event of its type (infinity if there is none).
   double end(std::size_t i) const;
+  /// When `event` would stop acting were it added now (as end() would give after add): start + duration,
+  /// or for duration 0 the end of the ease of the first event of its type that starts later (infinity if
+  /// there is none).
+  double endIfAdded(const Event& event) const;
+  /// The events of `event`'s type that act at some time while it would (from its start to endIfAdded), as
+  /// they stand: at least the most that would act together with it at any one time.
+  std::size_t countOverlapping(const Event& event) const;
   /// Wind, gravity (from `gravity`, the configured one) and head rotation at time t (s).
   EventSample sample(double t, const Vec3& gravity) const;
 
