@@ -199,6 +199,18 @@ void HairDisplay::rebuild() {
                   .arg(QString::fromStdString(stats.first_error)));
   else
     setStatus(rviz::StatusProperty::Ok, "Strips", QString("%1 strips").arg(stats.strips));
+  if (stats.over_budget > 0)
+    setStatus(
+        rviz::StatusProperty::Warn, "Vertices",
+        QString("%1 strips not drawn (from strip %2 on): they would take the mesh past %3 vertices at %4 x "
+                "%5 samples per span; lower the Level of Detail")
+            .arg(stats.over_budget)
+            .arg(static_cast<qulonglong>(stats.first_over_budget))
+            .arg(static_cast<qulonglong>(HairVisual::kMaxVertices))
+            .arg(options.level_of_detail.samples_across)
+            .arg(options.level_of_detail.samples_along));
+  else
+    deleteStatus("Vertices");
   current_level_property_->setStdString(std::to_string(options.level_of_detail.samples_across) + " x " +
                                         std::to_string(options.level_of_detail.samples_along) + ", " +
                                         std::to_string(stats.triangles) + " triangles");
