@@ -156,10 +156,14 @@ int HairDisplay::autoLevel(int current) const {
       Ogre::Vector3(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z())));
   const Ogre::Camera* camera = context_->getViewManager()->getCurrent()->getCamera();
   const double distance = std::max(1e-3, static_cast<double>(camera->getDerivedPosition().distance(centre)));
-  const double wanted =
-      (level_property_->getInt() + 1) * reference_distance_property_->getFloat() / distance - 1.0;
+  // Clamped before rounding: a huge Reference Distance (up to 3.4e38 m) must give the highest level, not
+  // overflow lround.
+  const double wanted = std::max(
+      0.0,
+      std::min(static_cast<double>(kMaxLevel),
+               (level_property_->getInt() + 1) * reference_distance_property_->getFloat() / distance - 1.0));
   if (std::abs(wanted - current) < 0.75) return current;  // hysteresis: no flicker at a boundary
-  return std::max(0, std::min(kMaxLevel, static_cast<int>(std::lround(wanted))));
+  return static_cast<int>(std::lround(wanted));
 }
 
 void HairDisplay::update(float wall_dt, float /*ros_dt*/) {
