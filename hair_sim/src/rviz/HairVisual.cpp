@@ -187,8 +187,21 @@ HairVisualStats HairVisual::update(const hair_sim_msgs::HairState& msg, const Ha
     }
     const std::size_t n_points = strip.xyz.size() / 3;
     points_.resize(n_points);
-    for (std::size_t k = 0; k < n_points; ++k)
+    std::size_t far_point = n_points;  // the first beyond kMaxCoordinate (NaN is the tessellator's to name)
+    for (std::size_t k = 0; k < n_points; ++k) {
       points_[k] = Vec3(strip.xyz[3 * k], strip.xyz[3 * k + 1], strip.xyz[3 * k + 2]);
+      if (far_point == n_points && points_[k].cwiseAbs().maxCoeff() > kMaxCoordinate) far_point = k;
+    }
+    if (far_point < n_points) {
+      skip(s, [&] {
+        const Vec3& p = points_[far_point];
+        char text[200];
+        std::snprintf(text, sizeof(text), "control point %zu (%g, %g, %g) is more than %g m from the origin",
+                      far_point, p.x(), p.y(), p.z(), kMaxCoordinate);
+        return std::string(text);
+      });
+      continue;
+    }
     // Meshes grow with the strips drawn only (at most kMaxVertices / 8 of them), not with the message.
     if (meshes_.size() <= strip_index_.size()) {
       meshes_.resize(strip_index_.size() + 1);
@@ -200,6 +213,12 @@ HairVisualStats HairVisual::update(const hair_sim_msgs::HairState& msg, const Ha
                               strip.hair_length, mesh);
     } catch (const std::exception& e) {
       skip(s, [&e] { return std::string(e.what()); });
+      continue;
+    }
+    // Ogre aborts rviz on a bounding box with a NaN corner: no vertex that is not finite reaches it.
+    if (!std::all_of(mesh.positions.begin(), mesh.positions.end(),
+                     [](const Vec3& p) { return p.allFinite(); })) {
+      skip(s, [] { return std::string("tessellation gave a vertex that is not finite"); });
       continue;
     }
     vertex_total += static_cast<std::size_t>(mesh.vertexCount());

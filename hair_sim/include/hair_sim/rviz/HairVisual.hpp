@@ -59,6 +59,9 @@ class HairVisual {
   static constexpr std::size_t kMaxVertices = 1000000;
   /// Largest control grid accepted (either direction).
   static constexpr std::uint32_t kMaxGrid = 1000;
+  /// Largest control point coordinate accepted (m, message frame). Points near FLT_MAX gave vertices that
+  /// overflow, and Ogre aborted rviz on the mesh's bounding box.
+  static constexpr double kMaxCoordinate = 1e6;
 
   /// Creates a scene node under parent holding the mesh, and this visual's own material.
   HairVisual(Ogre::SceneManager* scene_manager, Ogre::SceneNode* parent);
