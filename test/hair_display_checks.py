@@ -34,7 +34,8 @@ blended over the background has blue - green >= PARTIAL_MARGIN: the background s
                             2 x closer a finer one (>= 3 x 6); Topic elsewhere: no hair, Current Level "no
                             hair", the Topic status says nothing publishes it; back: hair.
   test_c_hostile_input      the hostile_* steps of the same run (messages from hair_display_live.py's own
-                            publisher): strips with colours outside [0, 1] skipped and named; a 1000 x 1000 grid
+                            publisher): strips with colours outside [0, 1] or control points beyond 1e6 m (near
+                            FLT_MAX they made Ogre abort rviz) skipped and named; a 1000 x 1000 grid
                             and 20,000 strips held to the display's 1,000,000-vertex budget (exact counts, the
                             Vertices status); Auto Level of Detail with Reference Distance 1e30: 8 x 16; Unreliable
                             with a publisher without UDP: messages still come; a topic of another type, no topic,
@@ -264,8 +265,13 @@ class HairDisplayChecks(unittest.TestCase):
         lines = live.stdout.decode(errors='replace').strip().splitlines()
         with open(log_path, 'a') as log:
             log.write('\n'.join(lines))
-        self.assertTrue(lines, 'hair_display_live.py printed nothing (see %s)' % log_path)
-        result = json.loads(lines[-1])
+        self.assertTrue(lines, 'hair_display_live.py printed nothing, exit status %d (see %s)' %
+                        (live.returncode, log_path))
+        try:
+            result = json.loads(lines[-1])
+        except ValueError:
+            self.fail('hair_display_live.py ended without its JSON line, exit status %d (a crash?): see %s' %
+                      (live.returncode, log_path))
         self.assertNotIn('error', result, result.get('error'))
         steps = {s['name']: s for s in result['steps']}
         type(self).live_steps = steps  # for test_c_hostile_input
@@ -335,6 +341,10 @@ class HairDisplayChecks(unittest.TestCase):
         # Colours NaN, 5 and -3: those strips are skipped, the first named.
         expect('hostile_colour', 'Strips', '3 of 20 strips skipped; strip 0: colour (nan, ')
         expect('hostile_colour', 'current_level', '2 x 4, 1088 triangles', True)
+        # Control points near FLT_MAX and 1e7 m away: skipped (rviz used to abort), the first named.
+        expect('hostile_far_points', 'Strips',
+               '2 of 20 strips skipped; strip 0: control point 0 (-3.3e+38, 3.3e+38, -3.3e+38) is more than 1e+06 m')
+        expect('hostile_far_points', 'current_level', '2 x 4, 1152 triangles', True)
         # A 1000 x 1000 grid (8 million vertices at 2 x 4) is over the vertex budget: the other 19 are drawn.
         expect('hostile_huge_grid', 'Strips', '19 strips', True)
         expect('hostile_huge_grid', 'Vertices', '1 strips not drawn (from strip 0 on)')

@@ -12,7 +12,8 @@ read-only properties and status. The last line on stdout is a JSON object: {"ste
 error. "status" maps each entry of the display's status (Topic, Transform, Strips, Vertices...) to its text.
 
 After the property steps, hostile input (steps named hostile_*): messages published from this process (rospy,
-latched, frame world) on HOSTILE_TOPIC: strips with bad colours, a 1000 x 1000 grid and 20,000 strips (both
+latched, frame world) on HOSTILE_TOPIC: strips with bad colours, with control points near FLT_MAX or
+10,000 km away, a 1000 x 1000 grid and 20,000 strips (both
 over the display's vertex budget), the automatic level with a huge Reference Distance, the Unreliable box with
 a publisher that has no UDP, a topic of another type, an empty topic, and a publisher (another process) that
 goes away.
@@ -207,6 +208,12 @@ def hostile(display, run, step, wait_status, messages):
     msg.strips[2].color.b = -3.0
     send(msg)
     step('hostile_colour')
+    # Control points near FLT_MAX (Ogre used to abort rviz on the mesh's bounding box) and 10,000 km away.
+    msg = hair_state()
+    msg.strips[0].xyz = [3.3e38 if k % 2 else -3.3e38 for k in range(len(msg.strips[0].xyz))]
+    msg.strips[1].xyz = [v + 1e7 for v in msg.strips[1].xyz]
+    send(msg)
+    step('hostile_far_points')
     # One strip of 1000 x 1000 control points (8 million vertices at 2 x 4): over the budget, not drawn.
     msg = hair_state()
     big = msg.strips[0]
