@@ -195,7 +195,9 @@ void HairDisplay::processMessage(const hair_sim_msgs::HairState::ConstPtr& msg) 
                   .arg(QString::fromStdString(msg->header.frame_id), fixed_frame_));
     return;
   }
-  setStatus(rviz::StatusProperty::Ok, "Transform", "OK");
+  // No "Transform: OK" of our own: rviz's tf filter keeps a status of its own for this topic, and an OK here
+  // stood beside its error for a frame that tf does not know (the messages it drops never get here).
+  deleteStatus("Transform");
   visual_->setPose(position, orientation);
   last_msg_ = msg;
   view_ = viewDirection();
