@@ -37,7 +37,8 @@ blended over the background has blue - green >= PARTIAL_MARGIN: the background s
                             publisher): strips with colours outside [0, 1] or control points beyond 1e6 m (near
                             FLT_MAX they made Ogre abort rviz) skipped and named; a 1000 x 1000 grid
                             and 20,000 strips held to the display's 1,000,000-vertex budget (exact counts, the
-                            Vertices status); Auto Level of Detail with Reference Distance 1e30: 8 x 16; Unreliable
+                            Vertices status); a frame tf does not know: named by rviz's tf filter, no
+                            "Transform: OK" of the display's own beside it; Auto Level of Detail with Reference Distance 1e30: 8 x 16; Unreliable
                             with a publisher without UDP: messages still come; a topic of another type, no topic,
                             a publisher that goes away: each named in the Topic status, the last hair kept.
 
@@ -353,6 +354,13 @@ class HairDisplayChecks(unittest.TestCase):
         expect('hostile_many_strips', 'Strips', '19607 strips', True)
         expect('hostile_many_strips', 'Vertices', '393 strips not drawn (from strip 19607 on)')
         expect('hostile_many_strips', 'current_level', '2 x 4, %d triangles' % (19607 * 64), True)
+        # A frame tf does not know: rviz's tf filter names it; no "Transform: OK" of the display's own beside
+        # that error; the last hair stays.
+        unknown = steps['hostile_unknown_frame']['status']
+        if not any('nowhere' in text for key, text in unknown.items() if key.startswith('Transform')):
+            misses.append('hostile_unknown_frame: no Transform status names the frame: %s' % unknown)
+        expect('hostile_unknown_frame', 'Transform', '', True)
+        expect('hostile_unknown_frame', 'current_level', '2 x 4, 1280 triangles', True)
         # Reference Distance 1e30 m: the highest level, not the lowest.
         expect('hostile_auto_huge_reference', 'current_level', '8 x 16, 20480 triangles', True)
         # Unreliable with a publisher that has no UDP (rospy): the messages come over TCP.

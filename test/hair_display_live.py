@@ -14,7 +14,7 @@ error. "status" maps each entry of the display's status (Topic, Transform, Strip
 After the property steps, hostile input (steps named hostile_*): messages published from this process (rospy,
 latched, frame world) on HOSTILE_TOPIC: strips with bad colours, with control points near FLT_MAX or
 10,000 km away, a 1000 x 1000 grid and 20,000 strips (both
-over the display's vertex budget), the automatic level with a huge Reference Distance, the Unreliable box with
+over the display's vertex budget), a frame that tf does not know, the automatic level with a huge Reference Distance, the Unreliable box with
 a publisher that has no UDP, a topic of another type, an empty topic, and a publisher (another process) that
 goes away.
 """
@@ -174,13 +174,13 @@ def main():
     step('other_topic')
     display.subProp('Topic').setValue('/hair_state')
     step('topic_back')
-    hostile(display, run, step, wait_status, messages)
+    hostile(display, run, step, wait_status, messages, status)
     print(json.dumps({'steps': steps}))
     sys.stdout.flush()
     os._exit(0)  # skip rviz's and Ogre's teardown: nothing to save, and it can hang on a virtual display
 
 
-def hostile(display, run, step, wait_status, messages):
+def hostile(display, run, step, wait_status, messages, status):
     """Hostile and broken input, as the module's docstring lists; each step records the display's status."""
     import rospy
     from hair_sim_msgs.msg import HairState
@@ -230,6 +230,18 @@ def hostile(display, run, step, wait_status, messages):
     send(msg)
     step('hostile_many_strips')
     send(hair_state())
+    # A frame that tf does not know: rviz's tf filter drops the messages (when its queue of 10 overflows) and
+    # says so in its Transform status; the last hair stays.
+    msg = hair_state()
+    msg.header.frame_id = 'nowhere'
+    end = time.time() + 10.0
+    while time.time() < end and not any('nowhere' in text for key, text in status().items()
+                                        if key.startswith('Transform')):
+        msg.header.stamp = rospy.Time.now()
+        pub.publish(msg)
+        run(0.05)
+    step('hostile_unknown_frame')
+    send(hair_state())  # the latched message is a good one again
     # Automatic level of detail with a huge Reference Distance: the highest level (8 x 16).
     auto = display.subProp('Auto Level of Detail')
     auto.subProp('Reference Distance').setValue(1e30)
