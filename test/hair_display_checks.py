@@ -31,7 +31,16 @@ blended over the background has blue - green >= PARTIAL_MARGIN: the background s
                             Level of Detail 0, 7, 3: Current Level 1 x 1 / 4 x 8 / 2 x 4 with the triangle
                             counts of the default hairstyle; Auto Level of Detail with the reference distance
                             at the view's distance: the camera 4 x farther gives a coarser level (<= 1 x 2),
-                            2 x closer a finer one (>= 3 x 6); Topic elsewhere: no hair; back: hair.
+                            2 x closer a finer one (>= 3 x 6); Topic elsewhere: no hair, Current Level "no
+                            hair", the Topic status says nothing publishes it; back: hair.
+  test_c_hostile_input      the hostile_* steps of the same run (messages from hair_display_live.py's own
+                            publisher): strips with colours outside [0, 1] or control points beyond 1e6 m (near
+                            FLT_MAX they made Ogre abort rviz) skipped and named; a 1000 x 1000 grid
+                            and 20,000 strips held to the display's 1,000,000-vertex budget (exact counts, the
+                            Vertices status); a frame tf does not know: named by rviz's tf filter, no
+                            "Transform: OK" of the display's own beside it; Auto Level of Detail with Reference Distance 1e30: 8 x 16; Unreliable
+                            with a publisher without UDP: messages still come; a topic of another type, no topic,
+                            a publisher that goes away: each named in the Topic status, the last hair kept.
 
 Screenshots and logs are kept in $ROS_HOME/hair_display_test/ (the build folder under ./run.sh test).
 Arguments: the rviz config (test/hair_display.rviz).
@@ -253,14 +262,20 @@ class HairDisplayChecks(unittest.TestCase):
         log_path = os.path.join(self.dir, 'rviz_live.log')
         with open(log_path, 'w') as log:
             live = subprocess.run(['/usr/bin/python3', script, self.config, self.dir], env=self.screen.env(),
-                                  stdout=subprocess.PIPE, stderr=log, timeout=150)
+                                  stdout=subprocess.PIPE, stderr=log, timeout=240)
         lines = live.stdout.decode(errors='replace').strip().splitlines()
         with open(log_path, 'a') as log:
             log.write('\n'.join(lines))
-        self.assertTrue(lines, 'hair_display_live.py printed nothing (see %s)' % log_path)
-        result = json.loads(lines[-1])
+        self.assertTrue(lines, 'hair_display_live.py printed nothing, exit status %d (see %s)' %
+                        (live.returncode, log_path))
+        try:
+            result = json.loads(lines[-1])
+        except ValueError:
+            self.fail('hair_display_live.py ended without its JSON line, exit status %d (a crash?): see %s' %
+                      (live.returncode, log_path))
         self.assertNotIn('error', result, result.get('error'))
         steps = {s['name']: s for s in result['steps']}
+        type(self).live_steps = steps  # for test_c_hostile_input
         area = render_area(load(steps['textured']['png']))
         shots = {name: analyse(s['png'], area) for name, s in steps.items()}
         for name in ('textured', 'untextured', 'threshold_0.6', 'override_red', 'topic_back', 'other_topic'):
@@ -297,7 +312,71 @@ class HairDisplayChecks(unittest.TestCase):
         self.assertLess(samples('auto_reference')[1], samples('auto_near')[1])
 
         self.assertLess(shots['other_topic']['hair'], 0.001, summary(shots['other_topic']))
+        # The read-only level no longer claims the triangles of hair it cleared, and the status says why.
+        self.assertEqual(steps['other_topic']['current_level'], 'no hair')
+        self.assertIn('nothing publishes /no_hair_here', steps['other_topic']['status'].get('Topic', ''))
         self.assertGreaterEqual(shots['topic_back']['hair'], MIN_HAIR, summary(shots['topic_back']))
+
+    def test_c_hostile_input(self):
+        """The hostile_* steps of hair_display_live.py (run by test_b): the display's status and level."""
+        steps = getattr(type(self), 'live_steps', None)
+        self.assertIsNotNone(steps, 'test_b_live_properties did not get the live steps')
+        for name in sorted(steps):
+            if name.startswith('hostile'):
+                self.report('%s: %s; %s' % (name, steps[name]['current_level'], steps[name]['status']))
+        misses = []  # every check is made, and every miss listed
+
+        def expect(name, key, wanted, exact=False):
+            """Step name's status entry key (or 'current_level') contains (or with exact, equals) wanted."""
+            got = steps[name]['current_level'] if key == 'current_level' else steps[name]['status'].get(key, '')
+            if (got != wanted) if exact else (wanted not in got):
+                misses.append('%s: %s is %r, expected %s%r' % (name, key, got, '' if exact else 'to contain ',
+                                                               wanted))
+
+        # 20 synthetic strips of 2 x 5 control points: 3 x 17 vertices and 64 triangles each at 2 x 4.
+        # The first message of the new topic is counted as the first (not after /hair_state's last few).
+        expect('hostile_good', 'Topic', '1 messages received', True)
+        expect('hostile_good', 'Strips', '20 strips', True)
+        expect('hostile_good', 'Vertices', '', True)
+        expect('hostile_good', 'current_level', '2 x 4, 1280 triangles', True)
+        # Colours NaN, 5 and -3: those strips are skipped, the first named.
+        expect('hostile_colour', 'Strips', '3 of 20 strips skipped; strip 0: colour (nan, ')
+        expect('hostile_colour', 'current_level', '2 x 4, 1088 triangles', True)
+        # Control points near FLT_MAX and 1e7 m away: skipped (rviz used to abort), the first named.
+        expect('hostile_far_points', 'Strips',
+               '2 of 20 strips skipped; strip 0: control point 0 (-3.3e+38, 3.3e+38, -3.3e+38) is more than 1e+06 m')
+        expect('hostile_far_points', 'current_level', '2 x 4, 1152 triangles', True)
+        # A 1000 x 1000 grid (8 million vertices at 2 x 4) is over the vertex budget: the other 19 are drawn.
+        expect('hostile_huge_grid', 'Strips', '19 strips', True)
+        expect('hostile_huge_grid', 'Vertices', '1 strips not drawn (from strip 0 on)')
+        expect('hostile_huge_grid', 'current_level', '2 x 4, 1216 triangles', True)
+        # 20,000 strips of 51 vertices: 19,607 fit in 1,000,000 vertices.
+        expect('hostile_many_strips', 'Strips', '19607 strips', True)
+        expect('hostile_many_strips', 'Vertices', '393 strips not drawn (from strip 19607 on)')
+        expect('hostile_many_strips', 'current_level', '2 x 4, %d triangles' % (19607 * 64), True)
+        # A frame tf does not know: rviz's tf filter names it; no "Transform: OK" of the display's own beside
+        # that error; the last hair stays.
+        unknown = steps['hostile_unknown_frame']['status']
+        if not any('nowhere' in text for key, text in unknown.items() if key.startswith('Transform')):
+            misses.append('hostile_unknown_frame: no Transform status names the frame: %s' % unknown)
+        expect('hostile_unknown_frame', 'Transform', '', True)
+        expect('hostile_unknown_frame', 'current_level', '2 x 4, 1280 triangles', True)
+        # Reference Distance 1e30 m: the highest level, not the lowest.
+        expect('hostile_auto_huge_reference', 'current_level', '8 x 16, 20480 triangles', True)
+        # Unreliable with a publisher that has no UDP (rospy): the messages come over TCP.
+        expect('hostile_unreliable', 'Topic', 'messages received')
+        expect('hostile_unreliable', 'Strips', '20 strips', True)
+        expect('hostile_wrong_type', 'Topic', '/rosout is published as rosgraph_msgs/Log, not hair_sim_msgs/HairState')
+        expect('hostile_empty_topic', 'Topic', 'No topic set', True)
+        # A publisher that goes away: its last hair stays, the status says that nothing publishes now.
+        expect('hostile_publisher', 'Topic', 'messages received')
+        expect('hostile_publisher_gone', 'Topic', 'nothing publishes /hair_display_gone now')
+        expect('hostile_publisher_gone', 'current_level', '2 x 4, 1280 triangles', True)
+        gone = analyse(steps['hostile_publisher_gone']['png'], render_area(load(steps['textured']['png'])))
+        self.report(summary(gone))
+        if gone['hair'] < 0.01:
+            misses.append('hostile_publisher_gone: no hair on screen: ' + summary(gone))
+        self.assertFalse(misses, '%d misses:\n' % len(misses) + '\n'.join(misses))
 
 
 if __name__ == '__main__':

@@ -2,6 +2,8 @@
 
 #include <OgreCamera.h>
 #include <OgreSceneNode.h>
+#include <ros/master.h>
+#include <ros/this_node.h>
 #include <rviz/display_context.h>
 #include <rviz/frame_manager.h>
 #include <rviz/properties/bool_property.h>
@@ -18,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 
 #include "hair_sim/rviz/HairVisual.hpp"
 
@@ -31,6 +34,8 @@ constexpr double kReportPeriod = 60.0;
 constexpr int kWindow = 30;
 /// A rebuild when the view direction turned by more than this (rad): the highlight follows the camera.
 constexpr double kViewChange = 0.09;
+/// With no message for this long (s), the master is asked whether the topic is published and with which type.
+constexpr double kTopicCheckPeriod = 2.0;
 }  // namespace
 
 HairDisplay::HairDisplay() {
@@ -71,7 +76,7 @@ HairDisplay::HairDisplay() {
   colour_property_ = new rviz::ColorProperty("Colour", QColor(70, 45, 25), "Hair colour (then shaded).",
                                              override_colour_property_, SLOT(updateGeometry()), this);
   current_level_property_ = new rviz::StringProperty(
-      "Current Level", "", "Samples across x along per span, triangles drawn.", this);
+      "Current Level", "no hair", "Samples across x along per span, triangles drawn.", this);
   current_level_property_->setReadOnly(true);
   update_time_property_ = new rviz::StringProperty(
       "Update Time", "", "Mean wall time per update (tessellation, shading and upload of the mesh).", this);
@@ -82,9 +87,16 @@ HairDisplay::~HairDisplay() = default;
 
 void HairDisplay::subscribe() {
   if (!isEnabled()) return;
+  if (topic_property_->getTopicStd().empty()) {
+    sub_.unsubscribe();
+    setStatus(rviz::StatusProperty::Error, "Topic", "No topic set");
+    return;
+  }
   try {
+    // Unreliable prefers UDP and falls back to TCP: a publisher without UDPROS (rospy, for one) still
+    // connects.
     const ros::TransportHints hints = unreliable_property_->getBool()
-                                          ? ros::TransportHints().unreliable()
+                                          ? ros::TransportHints().unreliable().reliable().tcpNoDelay()
                                           : ros::TransportHints().reliable().tcpNoDelay();
     sub_.subscribe(update_nh_, topic_property_->getTopicStd(),
                    static_cast<uint32_t>(queue_size_property_->getInt()), hints);
@@ -92,6 +104,45 @@ void HairDisplay::subscribe() {
   } catch (const ros::Exception& e) {
     setStatus(rviz::StatusProperty::Error, "Topic", QString("Error subscribing: ") + e.what());
   }
+  // The master is asked once no message has come for kTopicCheckPeriod.
+  since_message_ = 0.0;
+  since_topic_check_ = kTopicCheckPeriod;
+}
+
+void HairDisplay::checkTopic() {
+  std::string topic;
+  try {
+    topic = update_nh_.resolveName(topic_property_->getTopicStd());
+  } catch (const ros::Exception&) {
+    return;  // subscribe() has said so
+  }
+  if (topic.empty() || topic == "/") return;
+  // Not ros::master::getTopics: it waits for a master that is gone, and this runs in rviz's GUI thread.
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  args[1] = "";
+  if (!ros::master::execute("getPublishedTopics", args, result, payload, false)) return;
+  std::string type;
+  for (int i = 0; i < payload.size(); ++i) {
+    if (payload[i].size() == 2 && static_cast<std::string>(payload[i][0]) == topic) {
+      type = static_cast<std::string>(payload[i][1]);
+      break;
+    }
+  }
+  const QString name = QString::fromStdString(topic);
+  const std::string wanted = ros::message_traits::datatype<hair_sim_msgs::HairState>();
+  if (!type.empty() && type != wanted && type != "*")
+    setStatus(rviz::StatusProperty::Error, "Topic",
+              QString("%1 is published as %2, not %3")
+                  .arg(name, QString::fromStdString(type), QString::fromStdString(wanted)));
+  else if (type.empty() && messages_received_ == 0)
+    setStatus(rviz::StatusProperty::Warn, "Topic",
+              QString("No messages received: nothing publishes %1").arg(name));
+  else if (type.empty())
+    setStatus(rviz::StatusProperty::Warn, "Topic",
+              QString("%1 messages received; nothing publishes %2 now (the hair shown is the last message's)")
+                  .arg(messages_received_)
+                  .arg(name));
 }
 
 void HairDisplay::onInitialize() {
@@ -105,6 +156,7 @@ void HairDisplay::reset() {
   MFDClass::reset();
   if (visual_) visual_->clear();
   last_msg_.reset();
+  current_level_property_->setStdString("no hair");  // nothing drawn until the next message
   // Messages already handed to Qt's queue (of the previous topic, after a topic change) come before this call
   // in the queue: they are dropped until it runs.
   accepting_ = false;
@@ -126,8 +178,15 @@ void HairDisplay::updateGeometry() {
   context_->queueRender();
 }
 
+void HairDisplay::processTypeErasedMessage(boost::shared_ptr<const void> msg) {
+  // Queued before the last reset (e.g. from the previous topic): dropped before MessageFilterDisplay counts
+  // it in the Topic status ("N messages received" of the new topic).
+  if (!accepting_) return;
+  MFDClass::processTypeErasedMessage(std::move(msg));
+}
+
 void HairDisplay::processMessage(const hair_sim_msgs::HairState::ConstPtr& msg) {
-  if (!accepting_) return;  // queued before the last reset (e.g. from the previous topic)
+  since_message_ = 0.0;
   Ogre::Vector3 position;
   Ogre::Quaternion orientation;
   if (!context_->getFrameManager()->getTransform(msg->header, position, orientation)) {
@@ -136,7 +195,9 @@ void HairDisplay::processMessage(const hair_sim_msgs::HairState::ConstPtr& msg) 
                   .arg(QString::fromStdString(msg->header.frame_id), fixed_frame_));
     return;
   }
-  setStatus(rviz::StatusProperty::Ok, "Transform", "OK");
+  // No "Transform: OK" of our own: rviz's tf filter keeps a status of its own for this topic, and an OK here
+  // stood beside its error for a frame that tf does not know (the messages it drops never get here).
+  deleteStatus("Transform");
   visual_->setPose(position, orientation);
   last_msg_ = msg;
   view_ = viewDirection();
@@ -156,14 +217,25 @@ int HairDisplay::autoLevel(int current) const {
       Ogre::Vector3(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z())));
   const Ogre::Camera* camera = context_->getViewManager()->getCurrent()->getCamera();
   const double distance = std::max(1e-3, static_cast<double>(camera->getDerivedPosition().distance(centre)));
-  const double wanted =
-      (level_property_->getInt() + 1) * reference_distance_property_->getFloat() / distance - 1.0;
+  // Clamped before rounding: a huge Reference Distance (up to 3.4e38 m) must give the highest level, not
+  // overflow lround.
+  const double wanted = std::max(
+      0.0,
+      std::min(static_cast<double>(kMaxLevel),
+               (level_property_->getInt() + 1) * reference_distance_property_->getFloat() / distance - 1.0));
   if (std::abs(wanted - current) < 0.75) return current;  // hysteresis: no flicker at a boundary
-  return std::max(0, std::min(kMaxLevel, static_cast<int>(std::lround(wanted))));
+  return static_cast<int>(std::lround(wanted));
 }
 
 void HairDisplay::update(float wall_dt, float /*ros_dt*/) {
   since_report_ += wall_dt;
+  since_message_ += wall_dt;
+  since_topic_check_ += wall_dt;
+  // While no message comes: does the topic exist, with our type? (A type mismatch is only printed by roscpp.)
+  if (isEnabled() && since_message_ >= kTopicCheckPeriod && since_topic_check_ >= kTopicCheckPeriod) {
+    since_topic_check_ = 0.0;
+    checkTopic();
+  }
   if (!last_msg_ || !visual_) return;
   bool changed = false;
   if (auto_level_property_->getBool()) {
@@ -199,6 +271,18 @@ void HairDisplay::rebuild() {
                   .arg(QString::fromStdString(stats.first_error)));
   else
     setStatus(rviz::StatusProperty::Ok, "Strips", QString("%1 strips").arg(stats.strips));
+  if (stats.over_budget > 0)
+    setStatus(
+        rviz::StatusProperty::Warn, "Vertices",
+        QString("%1 strips not drawn (from strip %2 on): they would take the mesh past %3 vertices at %4 x "
+                "%5 samples per span; lower the Level of Detail")
+            .arg(stats.over_budget)
+            .arg(static_cast<qulonglong>(stats.first_over_budget))
+            .arg(static_cast<qulonglong>(HairVisual::kMaxVertices))
+            .arg(options.level_of_detail.samples_across)
+            .arg(options.level_of_detail.samples_along));
+  else
+    deleteStatus("Vertices");
   current_level_property_->setStdString(std::to_string(options.level_of_detail.samples_across) + " x " +
                                         std::to_string(options.level_of_detail.samples_along) + ", " +
                                         std::to_string(stats.triangles) + " triangles");

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "hair_sim/core/geometry/HairLook.hpp"
@@ -112,6 +113,20 @@ Rgba HairVisual::stripColour(const std_msgs::ColorRGBA& c) {
   return Rgba{c.r, c.g, c.b, c.a};
 }
 
+bool HairVisual::colourValid(const std_msgs::ColorRGBA& c) {
+  // Written so that NaN fails.
+  const auto in_range = [](float v) { return v >= 0.0f && v <= 1.0f; };
+  return in_range(c.r) && in_range(c.g) && in_range(c.b) && in_range(c.a);
+}
+
+std::string HairVisual::colourError(const std_msgs::ColorRGBA& c) {
+  if (colourValid(c)) return "";
+  char text[160];
+  std::snprintf(text, sizeof(text), "colour (%g, %g, %g, %g) has a channel outside [0, 1]", c.r, c.g, c.b,
+                c.a);
+  return text;
+}
+
 bool HairVisual::mirrored(std::size_t index) { return ((index * 2654435761U) >> 7) & 1U; }
 
 void HairVisual::setPose(const Ogre::Vector3& position, const Ogre::Quaternion& orientation) {
@@ -131,34 +146,82 @@ HairVisualStats HairVisual::update(const hair_sim_msgs::HairState& msg, const Ha
   if (tessellator_.levelOfDetail().samples_across != options.level_of_detail.samples_across ||
       tessellator_.levelOfDetail().samples_along != options.level_of_detail.samples_along)
     tessellator_.setLevelOfDetail(options.level_of_detail);
-  if (meshes_.size() < msg.strips.size()) {
-    meshes_.resize(msg.strips.size());
-    colours_.resize(msg.strips.size());
-  }
   strip_index_.clear();
   Vec3 sum = Vec3::Zero();
   std::size_t point_count = 0;
+  std::size_t vertex_total = 0;
+  // Skips strip s; why() (called for the first skipped strip only) says why.
+  const auto skip = [&stats](std::size_t s, const auto& why) {
+    if (stats.skipped++ == 0) stats.first_error = "strip " + std::to_string(s) + ": " + why();
+  };
   for (std::size_t s = 0; s < msg.strips.size(); ++s) {
     const hair_sim_msgs::StripState& strip = msg.strips[s];
+    // Cheap checks first (a hostile message may hold a million strips), the tessellator's own after.
+    if (strip.columns > kMaxGrid || strip.rows > kMaxGrid) {
+      skip(s, [&] {
+        return "grid " + std::to_string(strip.columns) + " x " + std::to_string(strip.rows) +
+               " is larger than " + std::to_string(kMaxGrid) + " x " + std::to_string(kMaxGrid);
+      });
+      continue;
+    }
+    if (strip.xyz.size() != 3 * static_cast<std::size_t>(strip.columns) * strip.rows) {
+      skip(s, [&] {
+        return std::to_string(strip.xyz.size()) + " xyz values for a " + std::to_string(strip.columns) +
+               " x " + std::to_string(strip.rows) + " grid (3 per point)";
+      });
+      continue;
+    }
+    if (!colourValid(strip.color)) {
+      skip(s, [&] { return colourError(strip.color); });
+      continue;
+    }
+    if (strip.columns >= 2 && strip.rows >= 4) {  // else the tessellator says what is wrong
+      const std::size_t vertices = static_cast<std::size_t>(Tessellator::verticesAcross(
+                                       static_cast<int>(strip.columns), options.level_of_detail)) *
+                                   static_cast<std::size_t>(Tessellator::verticesAlong(
+                                       static_cast<int>(strip.rows), options.level_of_detail));
+      if (vertex_total + vertices > kMaxVertices) {
+        if (stats.over_budget++ == 0) stats.first_over_budget = s;
+        continue;
+      }
+    }
     const std::size_t n_points = strip.xyz.size() / 3;
     points_.resize(n_points);
-    for (std::size_t k = 0; k < n_points; ++k)
+    std::size_t far_point = n_points;  // the first beyond kMaxCoordinate (NaN is the tessellator's to name)
+    for (std::size_t k = 0; k < n_points; ++k) {
       points_[k] = Vec3(strip.xyz[3 * k], strip.xyz[3 * k + 1], strip.xyz[3 * k + 2]);
+      if (far_point == n_points && points_[k].cwiseAbs().maxCoeff() > kMaxCoordinate) far_point = k;
+    }
+    if (far_point < n_points) {
+      skip(s, [&] {
+        const Vec3& p = points_[far_point];
+        char text[200];
+        std::snprintf(text, sizeof(text), "control point %zu (%g, %g, %g) is more than %g m from the origin",
+                      far_point, p.x(), p.y(), p.z(), kMaxCoordinate);
+        return std::string(text);
+      });
+      continue;
+    }
+    // Meshes grow with the strips drawn only (at most kMaxVertices / 8 of them), not with the message.
+    if (meshes_.size() <= strip_index_.size()) {
+      meshes_.resize(strip_index_.size() + 1);
+      colours_.resize(strip_index_.size() + 1);
+    }
+    StripMesh& mesh = meshes_[strip_index_.size()];
     try {
-      if (strip.xyz.size() != 3 * static_cast<std::size_t>(strip.columns) * strip.rows)
-        throw std::invalid_argument(std::to_string(strip.xyz.size()) + " xyz values for a " +
-                                    std::to_string(strip.columns) + " x " + std::to_string(strip.rows) +
-                                    " grid (3 per point)");
-      if (strip.columns > 1000 || strip.rows > 1000)
-        throw std::invalid_argument("grid " + std::to_string(strip.columns) + " x " +
-                                    std::to_string(strip.rows) + " is larger than 1000 x 1000");
-      StripMesh& mesh = meshes_[strip_index_.size()];
       tessellator_.tessellate(points_, static_cast<int>(strip.columns), static_cast<int>(strip.rows),
                               strip.hair_length, mesh);
     } catch (const std::exception& e) {
-      if (stats.skipped++ == 0) stats.first_error = "strip " + std::to_string(s) + ": " + e.what();
+      skip(s, [&e] { return std::string(e.what()); });
       continue;
     }
+    // Ogre aborts rviz on a bounding box with a NaN corner: no vertex that is not finite reaches it.
+    if (!std::all_of(mesh.positions.begin(), mesh.positions.end(),
+                     [](const Vec3& p) { return p.allFinite(); })) {
+      skip(s, [] { return std::string("tessellation gave a vertex that is not finite"); });
+      continue;
+    }
+    vertex_total += static_cast<std::size_t>(mesh.vertexCount());
     for (const Vec3& p : points_) sum += p;
     point_count += points_.size();
     strip_index_.push_back(s);

@@ -7,6 +7,7 @@
 #include <OgreVector.h>
 #include <hair_sim_msgs/HairState.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -33,8 +34,11 @@ struct HairVisualOptions {
 /// What the last update() did, and how long each stage took (wall time).
 struct HairVisualStats {
   int strips = 0;   ///< drawn
-  int skipped = 0;  ///< rejected (bad size, length or point); first_error says why for the first
+  int skipped = 0;  ///< rejected (bad size, length, point or colour); first_error says why for the first
   std::string first_error;
+  /// Good strips left out because drawing them would exceed HairVisual::kMaxVertices; the first's index.
+  int over_budget = 0;
+  std::size_t first_over_budget = 0;
   int vertices = 0;
   std::int64_t triangles = 0;  ///< drawn (both faces come from one triangle: culling is off)
   double tessellate_seconds = 0.0;
@@ -49,6 +53,15 @@ class HairVisual {
   static constexpr int kTextureWidth = 128;
   static constexpr int kTextureHeight = 256;
   static constexpr int kTextureStrands = 10;
+  /// Most vertices drawn for one message (about 100 MB of meshes): the strips after the budget is spent are
+  /// left out, so a huge message (1e6 strips, a 1000 x 1000 grid) cannot freeze rviz or exhaust memory. The
+  /// default hairstyle takes 5,100 at the default level and 58,500 at the highest.
+  static constexpr std::size_t kMaxVertices = 1000000;
+  /// Largest control grid accepted (either direction).
+  static constexpr std::uint32_t kMaxGrid = 1000;
+  /// Largest control point coordinate accepted (m, message frame). Points near FLT_MAX gave vertices that
+  /// overflow, and Ogre aborted rviz on the mesh's bounding box.
+  static constexpr double kMaxCoordinate = 1e6;
 
   /// Creates a scene node under parent holding the mesh, and this visual's own material.
   HairVisual(Ogre::SceneManager* scene_manager, Ogre::SceneNode* parent);
@@ -71,6 +84,10 @@ class HairVisual {
 
   /// The strip's colour, or the default hair colour when all four channels are zero (not given).
   static Rgba stripColour(const std_msgs::ColorRGBA& colour);
+  /// Whether every channel is in [0, 1] (NaN is not).
+  static bool colourValid(const std_msgs::ColorRGBA& colour);
+  /// Empty for a valid colour, else why it is not.
+  static std::string colourError(const std_msgs::ColorRGBA& colour);
   /// Whether strip `index` shows its texture tile mirrored across (u -> 1 - u): varies the strands.
   static bool mirrored(std::size_t index);
 
