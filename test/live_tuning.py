@@ -140,6 +140,20 @@ class LiveTuning(unittest.TestCase):
         self.reconfigure(samples_across=2, samples_along=4)
         self.wait_markers(lambda ns: len(ns.get('hair', Marker()).points) == mesh_points,
                           'the %d points of 2 x 4 again' % mesh_points)
+        # A triangle budget below the coarsest level (1 x 1: 8 triangles for each of the 100 strips of 2 x 5)
+        # cannot be met: refused, the previous value (0, off) kept.
+        answer = self.reconfigure(max_triangles=100)
+        self.assertEqual(answer['max_triangles'], 0, 'max_triangles 100 below the coarsest 800: the reply')
+        self.assertEqual(self.client.get_configuration(timeout=5.0)['max_triangles'], 0)
+        self.wait_markers(lambda ns: len(ns.get('hair', Marker()).points) == mesh_points,
+                          'the %d points of 2 x 4 still' % mesh_points)
+        answer = self.reconfigure(max_triangles=3000)
+        self.assertEqual(answer['max_triangles'], 3000)
+        self.wait_markers(lambda ns: len(ns.get('hair', Marker()).points) == 3 * 2400,
+                          'the 3 x 2400 points of 1 x 3, the finest level within 3000 triangles')
+        self.reconfigure(max_triangles=0)
+        self.wait_markers(lambda ns: len(ns.get('hair', Marker()).points) == mesh_points,
+                          'the %d points of 2 x 4 again' % mesh_points)
 
         # 4. Wind scale.
         wind = Wind()

@@ -15,6 +15,7 @@
 #include <system_error>
 #include <type_traits>
 
+#include "hair_sim/core/geometry/Tessellator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/util/YamlReader.hpp"
 #include "hair_sim/ros/InputChecks.hpp"
@@ -68,7 +69,16 @@ bool readParam(const ros::NodeHandle& nh, const std::string& name, T& value) {
 HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(nh), pnh_(private_nh) {
   readParameters();
   body_held_.assign(config_.bodies.size(), false);
-  rebuild(loadHairstyle(config_.hairstyle_file));
+  Hairstyle style = loadHairstyle(config_.hairstyle_file);
+  // A triangle budget below the coarsest level cannot be met (the core refuses it): name the parameter.
+  std::vector<StripShape> shapes;
+  for (const Strip& s : style.strips) shapes.push_back(StripShape{s.columns, s.rows});
+  min_triangles_ = Tessellator::triangleCount(shapes, Tessellator::ladderLevel(0));
+  if (mesh_options_.max_triangles > 0 && mesh_options_.max_triangles < min_triangles_)
+    throw badParam("max_triangles", std::to_string(mesh_options_.max_triangles),
+                   "is below the coarsest level's " + std::to_string(min_triangles_) +
+                       " triangles (1 x 1) for this hairstyle: at least that, or 0 (off)");
+  rebuild(std::move(style));
   // Before any subscription: in a nodelet manager callbacks may start as soon as they exist.
   diagnostics_ = std::make_unique<HairSimDiagnostics>(
       nh_, pnh_, pnh_.getNamespace(), "hair_sim " + config_.head_frame, config_.physics.substep);
@@ -79,7 +89,7 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(n
                      : render_mode_ == RenderMode::Strands ? "strands"
                                                            : "both";
   live.mesh = mesh_options_;
-  live_ = std::make_unique<LiveParameters>(pnh_, live);
+  live_ = std::make_unique<LiveParameters>(pnh_, live, min_triangles_);
   // A subscriber that connects gets TCP_NODELAY on its connection (~tcp_nodelay), whether it asked or not.
   const ros::SubscriberStatusCallback connected = boost::bind(&HairSimNode::onSubscriberConnect, this);
   markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("hair_markers", 2, connected);
@@ -991,6 +1001,9 @@ void HairSimNode::applyLiveSettings() {
       s.mesh.max_triangles != mesh_options_.max_triangles) {
     mesh_options_ = s.mesh;
     makeMeshBuilder();
+    const LevelOfDetail& level = meshes_->levelOfDetail();
+    ROS_INFO("hair_sim: level of detail now %d x %d: %lld triangles", level.samples_across,
+             level.samples_along, static_cast<long long>(meshes_->triangleCount()));
   }
 }
 

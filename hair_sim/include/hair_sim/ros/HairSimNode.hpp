@@ -148,6 +148,7 @@ class HairSimNode {
 
   std::unique_ptr<Simulator> simulator_;
   std::unique_ptr<HairMeshBuilder> meshes_;
+  std::int64_t min_triangles_ = 0;  ///< the hairstyle's triangles at the coarsest level (1 x 1)
   HeadMotionEstimator head_;
   bool started_ = false;
   /// The substeps lie on a grid fixed in ROS time, sim_time_ = gridTime(sim_step_) = sim_step_ * substep, so
