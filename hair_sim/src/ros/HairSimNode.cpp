@@ -730,7 +730,10 @@ void HairSimNode::warnThrottled(const std::string& what, const std::string& text
 void HairSimNode::onTimer(const ros::TimerEvent&) {
   guarded("the timer", [&] {
     // A fallback while no tf comes in (the hair still settles and is published at publish_rate).
-    if ((ros::WallTime::now() - last_tf_publish_).toSec() < 1.5 / config_.publish_rate) return;
+    // Not between two tf messages that come in more slowly than publish_rate: the outputs follow the tf
+    // then, and the timer would only send the last one again (same stamp, same hair).
+    const double wait = std::max(1.5 / config_.publish_rate, 2.0 * tf_interval_);
+    if ((ros::WallTime::now() - last_tf_update_).toSec() < wait) return;
     update(false);
   });
 }
@@ -739,6 +742,14 @@ void HairSimNode::update(bool from_tf) {
   const double dt = config_.physics.substep;
   Iso3 latest_pose;
   ros::Time target;
+  if (from_tf) {
+    const ros::WallTime now = ros::WallTime::now();
+    // The longest recent interval, forgotten by 10 % a message: two messages that arrive together (a
+    // busy host) do not make the tf look fast.
+    if (!last_tf_update_.isZero())
+      tf_interval_ = std::max(std::min((now - last_tf_update_).toSec(), max_tf_age_), 0.9 * tf_interval_);
+    last_tf_update_ = now;
+  }
   applyLiveSettings();
   if (!lookupPose(config_.head_frame, ros::Time(0), latest_pose, &target)) {
     diagnostics_->headPoseMissing();
@@ -873,7 +884,6 @@ void HairSimNode::update(bool from_tf) {
   // the same states); the timer publishes whenever it acts.
   const double period = 1.0 / config_.publish_rate;
   if (from_tf && !next_publish_.isZero() && target < next_publish_) return;
-  if (from_tf) last_tf_publish_ = ros::WallTime::now();
   next_publish_ = gridTime(gridIndexAtOrBefore(target, period) + 1, period);
   if (last_body_frames_.size() != config_.bodies.size()) {
     for (std::size_t b = 0; b < config_.bodies.size(); ++b)
