@@ -952,7 +952,27 @@ void HairSimNode::publishOutputs(const ros::Time& stamp, const Iso3& pose,
     bodies_scratch_.push_back(config_.bodies[b].shape.transformed(body_frames[b]));
   meshes_->build(world_points_, simulator_->stripOffsets(), simulator_->hairstyle().scalp.transformed(pose),
                  bodies_scratch_);
-  markers_view_.update(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp);
+  // Too large for any subscriber (and gigabytes to build at every output, which stalled the hair): not sent.
+  const std::uint64_t bound = hairMarkersSizeBound(*meshes_, render_mode_, strands_per_strip_);
+  if (bound > kMaxMarkersBytes) {
+    const LevelOfDetail& level = meshes_->levelOfDetail();
+    const char* mode = render_mode_ == RenderMode::Mesh      ? "mesh"
+                       : render_mode_ == RenderMode::Strands ? "strands"
+                                                             : "both";
+    char text[400];
+    std::snprintf(
+        text, sizeof(text),
+        "hair_sim: hair_markers not sent: it would take up to %.2f GB (render_mode %s, "
+        "strands_per_strip %d, level of detail %d x %d), more than the 1 GB a ROS subscriber accepts: "
+        "lower ~strands_per_strip or the level of detail (hair_state goes on)",
+        1e-9 * static_cast<double>(bound), mode, strands_per_strip_, level.samples_across,
+        level.samples_along);
+    warnThrottled("markers size", text, 5.0);
+    return;
+  }
+  // A namespace the new render mode drops is deleted in the messages of the next second (at least 3).
+  markers_view_.update(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp,
+                       std::max(3, static_cast<int>(std::ceil(config_.publish_rate))));
   markers_pub_.publish(markers_view_);
 }
 
