@@ -57,6 +57,8 @@ expect_refused "max_tf_age beyond the tf cache" "parameter ~max_tf_age: '12' mus
   _config_file:="$CONFIG" _max_tf_age:=12.0
 expect_refused "max_substeps_per_update huge" "parameter ~max_substeps_per_update: '1000000' must be in 1..24000" \
   _config_file:="$CONFIG" _max_substeps_per_update:=1000000
+expect_refused "max_triangles below the coarsest level" "parameter ~max_triangles: '100' is below the coarsest level's 800 triangles (1 x 1)" \
+  _config_file:="$CONFIG" _max_triangles:=100
 expect_refused "strands_per_strip huge" "parameter ~strands_per_strip: '1000000' must be in 1..10000" \
   _config_file:="$CONFIG" _strands_per_strip:=1000000
 expect_refused "missing config file" "$TMP/none.yaml" _config_file:="$TMP/none.yaml"

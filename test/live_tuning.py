@@ -4,11 +4,15 @@
   test_live_parameters
       0. Waits for hair_state and sends a steady wind of 3 m/s along +x (Wind, ramp 0).
       1. render_mode strands: within 2 s hair_markers carries a LINE_LIST in ns 'strands' and no 'hair'
-         mesh; render_mode mesh: the TRIANGLE_LIST is back.
+         mesh; render_mode mesh: the TRIANGLE_LIST is back. What rviz would show (every message's ADD and
+         DELETE applied in order) follows: strands only, then the mesh only; both, then mesh: the strands
+         are gone (a namespace a switch drops is deleted, not left behind).
       2. render_mode bogus: rejected, the server answers with the previous value (mesh) and the
          markers stay a mesh.
       3. samples_across 1, samples_along 2: the mesh has fewer points (both faces of
          2 (n_u - 1)(n_v - 1) triangles per strip); back to 2 x 4: the first count again.
+         max_triangles 100, below the coarsest level's 800: refused (the reply and the configuration keep 0),
+         the mesh unchanged; 3000: the ladder's 1 x 3 (2400 triangles, 7200 points); 0: 2 x 4 again.
       4. The wind bends the hair: mean tip x displacement from the windless start d_wind > 5 mm.
          wind_scale 0: the tips come back (|d| < d_wind / 4) within 6 s; wind_scale 1: bent again.
       5. hinge_stiffness x 10: the steady displacement drops below d_wind / 2 (a stiffer hinge bends less).
@@ -18,7 +22,20 @@
          say 0.1, and the hair keeps stepping.
       Throughout, HairState.step only grows: a change never resets the simulation.
 
-Private parameters: node (default /hair_sim).
+A second node, /extreme/hair_sim, runs with settings at their extremes: publish_rate 200 (above head_driver's
+100 Hz tf), render_mode strands and strands_per_strip 10000.
+
+  test_p_publish_rate_above_the_tf_rate
+      Its hair_state over 3 s: at most 5 % of the stamps not newer than the one before (the outputs follow the
+      100 Hz tf; before, the timer sent the last output again between two tf messages: 141 Hz, a third of
+      them repeats), and at least 50 Hz of them.
+  test_s_markers_too_large_for_a_subscriber
+      hair_markers would be 1.3 GB, beyond the 1 GB a roscpp subscriber accepts: subscribed to it, the node
+      warns ('hair_markers not sent', naming ~strands_per_strip) and sends none, and its hair_state keeps
+      coming (at least 50 Hz; before, it built the 1.3 GB at every output: 4.8 GB resident, the hair stalled
+      for seconds at a time and no subscriber got anything).
+
+Private parameters: node (default /hair_sim), extreme_node (default /extreme/hair_sim).
 """
 import sys
 import threading
@@ -30,6 +47,7 @@ import dynamic_reconfigure.client
 import rospy
 import rostest
 from hair_sim_msgs.msg import HairState, Wind
+from rosgraph_msgs.msg import Log
 from visualization_msgs.msg import Marker, MarkerArray
 
 PKG = 'hair_sim'
@@ -47,6 +65,7 @@ class LiveTuning(unittest.TestCase):
         self.lock = threading.Lock()
         self.state = None
         self.markers = None
+        self.shown = {}  # (ns, id) -> marker type: what rviz shows after every message received
         self.steps = []
         rospy.Subscriber('hair_state', HairState, self.on_state, queue_size=2)
         rospy.Subscriber('hair_markers', MarkerArray, self.on_markers, queue_size=1, buff_size=1 << 24)
@@ -60,6 +79,25 @@ class LiveTuning(unittest.TestCase):
     def on_markers(self, msg):
         with self.lock:
             self.markers = (rospy.get_time(), msg)
+            for m in msg.markers:
+                if m.action == Marker.DELETEALL:
+                    self.shown.clear()
+                elif m.action == Marker.DELETE:
+                    self.shown.pop((m.ns, m.id), None)
+                else:
+                    self.shown[(m.ns, m.id)] = m.type
+
+    def wait_shown(self, expected, what, timeout=3.0):
+        """rviz's markers from hair_markers (ns -> type) become `expected` within timeout."""
+        deadline = time.time() + timeout
+        while True:
+            with self.lock:
+                shown = {ns: t for (ns, _), t in self.shown.items()}
+            if shown == expected:
+                return
+            self.assertLess(time.time(), deadline, 'within %.0f s rviz would not show %s (%s); it shows %s'
+                            % (timeout, expected, what, shown))
+            time.sleep(0.05)
 
     def tips(self):
         with self.lock:
@@ -86,7 +124,7 @@ class LiveTuning(unittest.TestCase):
         deadline = time.time() + timeout
         while True:
             with self.lock:
-                ns = {m.ns: m for m in self.markers[1].markers} if self.markers else {}
+                ns = {m.ns: m for m in self.markers[1].markers if m.action == Marker.ADD} if self.markers else {}
             if ns and predicate(ns):
                 return ns
             self.assertLess(time.time(), deadline, 'within %.0f s no hair_markers with %s; last: %s'
@@ -119,10 +157,16 @@ class LiveTuning(unittest.TestCase):
         self.reconfigure(render_mode='strands')
         ns = self.wait_markers(lambda ns: 'strands' in ns and 'hair' not in ns, 'strands only')
         self.assertEqual(ns['strands'].type, Marker.LINE_LIST)
+        self.wait_shown({'strands': Marker.LINE_LIST}, 'mesh -> strands: the mesh deleted')
         self.reconfigure(render_mode='mesh')
         ns = self.wait_markers(lambda ns: 'hair' in ns and 'strands' not in ns, 'the mesh only')
         self.assertEqual(ns['hair'].type, Marker.TRIANGLE_LIST)
         mesh_points = len(ns['hair'].points)
+        self.wait_shown({'hair': Marker.TRIANGLE_LIST}, 'strands -> mesh: the strands deleted')
+        self.reconfigure(render_mode='both')
+        self.wait_shown({'hair': Marker.TRIANGLE_LIST, 'strands': Marker.LINE_LIST}, 'both')
+        self.reconfigure(render_mode='mesh')
+        self.wait_shown({'hair': Marker.TRIANGLE_LIST}, 'both -> mesh: the strands deleted')
 
         # 2. A bad value is refused and the previous one kept.
         answer = self.reconfigure(render_mode='bogus')
@@ -138,6 +182,20 @@ class LiveTuning(unittest.TestCase):
         rospy.loginfo('%s: level of detail 2 x 4: %d points, 1 x 2: %d points', NAME, mesh_points,
                       len(ns['hair'].points))
         self.reconfigure(samples_across=2, samples_along=4)
+        self.wait_markers(lambda ns: len(ns.get('hair', Marker()).points) == mesh_points,
+                          'the %d points of 2 x 4 again' % mesh_points)
+        # A triangle budget below the coarsest level (1 x 1: 8 triangles for each of the 100 strips of 2 x 5)
+        # cannot be met: refused, the previous value (0, off) kept.
+        answer = self.reconfigure(max_triangles=100)
+        self.assertEqual(answer['max_triangles'], 0, 'max_triangles 100 below the coarsest 800: the reply')
+        self.assertEqual(self.client.get_configuration(timeout=5.0)['max_triangles'], 0)
+        self.wait_markers(lambda ns: len(ns.get('hair', Marker()).points) == mesh_points,
+                          'the %d points of 2 x 4 still' % mesh_points)
+        answer = self.reconfigure(max_triangles=3000)
+        self.assertEqual(answer['max_triangles'], 3000)
+        self.wait_markers(lambda ns: len(ns.get('hair', Marker()).points) == 3 * 2400,
+                          'the 3 x 2400 points of 1 x 3, the finest level within 3000 triangles')
+        self.reconfigure(max_triangles=0)
         self.wait_markers(lambda ns: len(ns.get('hair', Marker()).points) == mesh_points,
                           'the %d points of 2 x 4 again' % mesh_points)
 
@@ -186,6 +244,53 @@ class LiveTuning(unittest.TestCase):
             steps = list(self.steps)
         self.assertTrue(all(b >= a for a, b in zip(steps, steps[1:])), 'the step count went back: a reset')
 
+    def extreme_states(self):
+        """/extreme's hair_state as (arrival, stamp) pairs, appended as they come."""
+        node = rospy.get_param('~extreme_node', '/extreme/hair_sim')
+        ns = node.rsplit('/', 1)[0]
+        states = []
+        sub = rospy.Subscriber(ns + '/hair_state', HairState,
+                               lambda m: states.append((time.time(), m.header.stamp.to_sec())), queue_size=50)
+        self.wait_for(lambda: len(states) > 0, 30.0, '%s/hair_state' % ns)
+        return node, ns, states, sub
+
+    def rate_since(self, states, start, seconds):
+        return sum(1 for t, _ in states if t >= start) / seconds
+
+    def test_p_publish_rate_above_the_tf_rate(self):
+        node, ns, states, sub = self.extreme_states()
+        start = time.time()
+        time.sleep(3.0)
+        window = [stamp for t, stamp in list(states) if t >= start]
+        sub.unregister()
+        repeats = sum(1 for a, b in zip(window, window[1:]) if b <= a)
+        rospy.loginfo('%s: %s/hair_state (publish_rate 200, tf at 100 Hz): %.1f Hz, %d of %d stamps not newer '
+                      'than the one before', NAME, ns, len(window) / 3.0, repeats, len(window))
+        # (A tf message late by a whole interval lets the timer send the last output again: rare.)
+        self.assertLessEqual(repeats, 0.05 * len(window),
+                             '%d of %d hair_state not newer than the one before' % (repeats, len(window)))
+        self.assertGreaterEqual(len(window) / 3.0, 50.0)
+
+    def test_s_markers_too_large_for_a_subscriber(self):
+        node, ns, states, sub = self.extreme_states()
+        warnings = []
+        markers = []
+        log_sub = rospy.Subscriber('/rosout', Log, lambda m: warnings.append(m.msg)
+                                   if m.name == node and 'hair_markers not sent' in m.msg else None, queue_size=100)
+        self.wait_for(lambda: log_sub.get_num_connections() > 0, 10.0, 'a connection to /rosout')
+        markers_sub = rospy.Subscriber(ns + '/hair_markers', rospy.AnyMsg, lambda m: markers.append(len(m._buff)),
+                                       queue_size=1)
+        self.wait_for(lambda: warnings, 8.0, "a warning 'hair_markers not sent' from %s" % node)
+        rospy.loginfo('%s: %s', NAME, warnings[0])
+        self.assertIn('strands_per_strip 10000', warnings[0])
+        start = time.time()
+        time.sleep(3.0)
+        rate = self.rate_since(states, start, 3.0)
+        markers_sub.unregister()
+        sub.unregister()
+        rospy.loginfo('%s: %s/hair_state at %.1f Hz with its hair_markers subscribed', NAME, ns, rate)
+        self.assertGreaterEqual(rate, 50.0, '%s/hair_state with its hair_markers subscribed' % ns)
+        self.assertEqual(markers, [], 'hair_markers of 1.3 GB sent')
 
 if __name__ == '__main__':
     rostest.rosrun(PKG, NAME, LiveTuning, sys.argv)

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 
 #include "TestUtil.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
@@ -91,8 +92,9 @@ TEST(HairMessagesTest, MarkersViewSendsTheBytesOfTheMarkerArray) {
   HairMarkersView view;
   for (RenderMode mode : {RenderMode::Both, RenderMode::Mesh, RenderMode::Strands, RenderMode::Both}) {
     const ros::Time stamp(1234.5678);
-    const visualization_msgs::MarkerArray reference = makeHairMarkers(f.meshes, mode, 6, "odom", stamp);
     view.update(f.meshes, mode, 6, "odom", stamp);
+    visualization_msgs::MarkerArray reference;  // with the DELETEs of the namespaces the mode dropped
+    fillHairMarkers(f.meshes, mode, 6, "odom", stamp, reference, view.deleted());
     const std::vector<std::uint8_t> expected = bytesOf(reference);
     EXPECT_EQ(view.serializedLength(), expected.size());
     EXPECT_TRUE(bytesOf(view) == expected) << "mode " << static_cast<int>(mode);
@@ -107,6 +109,85 @@ TEST(HairMessagesTest, MarkersViewSendsTheBytesOfTheMarkerArray) {
   EXPECT_STREQ(ros::message_traits::md5sum(view),
                ros::message_traits::md5sum<visualization_msgs::MarkerArray>());
   EXPECT_STREQ(ros::message_traits::datatype(view), "visualization_msgs/MarkerArray");
+}
+
+TEST(HairMessagesTest, SizeBoundHoldsAndFlagsMarkersNoSubscriberTakes) {
+  Fixture f;
+  HairMarkersView view;
+  for (RenderMode mode : {RenderMode::Mesh, RenderMode::Strands, RenderMode::Both})
+    for (int strands : {1, 6, 40}) {
+      view.update(f.meshes, mode, strands, "world", ros::Time(1.0));
+      EXPECT_LE(view.serializedLength(), hairMarkersSizeBound(f.meshes, mode, strands))
+          << "mode " << static_cast<int>(mode) << ", " << strands << " strands";
+    }
+  // The default mesh: 6,400 triangles of 3 vertices, 40 bytes each (the README's 768 kB).
+  EXPECT_EQ(hairMarkersSizeBound(f.meshes, RenderMode::Mesh, 6), 4096u + 768000u);
+  // 10,000 strands per strip at the default 2 x 4 (16 segments a strand, 100 strips): 1.28 GB.
+  EXPECT_EQ(hairMarkersSizeBound(f.meshes, RenderMode::Strands, 10000), 4096u + 40ull * 2 * 10000 * 16 * 100);
+  EXPECT_GT(hairMarkersSizeBound(f.meshes, RenderMode::Strands, 10000), kMaxMarkersBytes);
+  EXPECT_LT(hairMarkersSizeBound(f.meshes, RenderMode::Both, 6), kMaxMarkersBytes);
+}
+
+/// What rviz shows after a sequence of hair_markers: (ns, id) -> type, the DELETEs applied.
+std::map<std::string, int> shownBy(const std::vector<visualization_msgs::MarkerArray>& messages) {
+  std::map<std::string, int> shown;
+  for (const visualization_msgs::MarkerArray& array : messages)
+    for (const visualization_msgs::Marker& m : array.markers) {
+      const std::string key = m.ns + "/" + std::to_string(m.id);
+      if (m.action == visualization_msgs::Marker::DELETE)
+        shown.erase(key);
+      else if (m.action == visualization_msgs::Marker::DELETEALL)
+        shown.clear();
+      else
+        shown[key] = m.type;
+    }
+  return shown;
+}
+
+TEST(HairMessagesTest, ARenderModeSwitchDeletesTheNamespaceItDrops) {
+  Fixture f;
+  std::vector<Vec3> world;
+  f.sim.positionsWorld(Iso3::Identity(), world);
+  f.meshes.build(world, f.sim.stripOffsets(), f.sim.hairstyle().scalp);
+  HairMarkersView view;
+  std::vector<visualization_msgs::MarkerArray> sent;
+  auto publish = [&](RenderMode mode) {
+    view.update(f.meshes, mode, 2, "world", ros::Time(10.0), 3);
+    const std::vector<std::uint8_t> bytes = bytesOf(view);
+    visualization_msgs::MarkerArray received;
+    ros::serialization::IStream in(const_cast<std::uint8_t*>(bytes.data()),
+                                   static_cast<std::uint32_t>(bytes.size()));
+    ros::serialization::deserialize(in, received);
+    sent.push_back(received);
+    return received;
+  };
+  const auto tri = visualization_msgs::Marker::TRIANGLE_LIST, lines = visualization_msgs::Marker::LINE_LIST;
+  publish(RenderMode::Both);
+  EXPECT_EQ(sent.back().markers.size(), 2u);
+  EXPECT_EQ(shownBy(sent), (std::map<std::string, int>{{"hair/0", tri}, {"strands/0", lines}}));
+  // Both -> mesh: the strands go, in this message and the next two (three repeats), then no more.
+  for (int k = 0; k < 4; ++k) {
+    const visualization_msgs::MarkerArray m = publish(RenderMode::Mesh);
+    EXPECT_EQ(view.deleted(), k < 3 ? unsigned{kDeleteStrands} : unsigned{kDeleteNone}) << "message " << k;
+    ASSERT_EQ(m.markers.size(), k < 3 ? 2u : 1u) << "message " << k;
+    if (k < 3) {
+      EXPECT_EQ(m.markers[0].ns, "strands");
+      EXPECT_EQ(m.markers[0].action, visualization_msgs::Marker::DELETE);
+      EXPECT_EQ(m.markers[0].header.frame_id, "world");
+    }
+    EXPECT_EQ(shownBy(sent), (std::map<std::string, int>{{"hair/0", tri}})) << "message " << k;
+  }
+  // Mesh -> strands: the mesh goes.
+  publish(RenderMode::Strands);
+  EXPECT_EQ(view.deleted(), unsigned{kDeleteHair});
+  EXPECT_EQ(shownBy(sent), (std::map<std::string, int>{{"strands/0", lines}}));
+  // Strands -> both: nothing to delete (a DELETE of the mesh still due is dropped: the mesh is back).
+  publish(RenderMode::Both);
+  EXPECT_EQ(view.deleted(), unsigned{kDeleteNone});
+  EXPECT_EQ(shownBy(sent), (std::map<std::string, int>{{"hair/0", tri}, {"strands/0", lines}}));
+  // Both -> strands: the mesh goes.
+  publish(RenderMode::Strands);
+  EXPECT_EQ(shownBy(sent), (std::map<std::string, int>{{"strands/0", lines}}));
 }
 
 }  // namespace

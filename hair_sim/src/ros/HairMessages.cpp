@@ -29,6 +29,13 @@ void markerShell(visualization_msgs::Marker& m, bool strands, const std::string&
   m.color.r = m.color.g = m.color.b = m.color.a = 1.0f;
 }
 
+/// A DELETE of hair_markers' marker in ns "hair" (or "strands"): the header, ns, id and action count.
+void deleteShell(visualization_msgs::Marker& m, bool strands, const std::string& frame,
+                 const ros::Time& stamp) {
+  markerShell(m, strands, frame, stamp);
+  m.action = visualization_msgs::Marker::DELETE;
+}
+
 /// Every strip's strand lines (LINE_LIST point pairs) with their colours, appended.
 void allStrandLines(const HairMeshBuilder& meshes, int strands_per_strip, std::vector<Vec3>& points,
                     std::vector<Rgba>& colours) {
@@ -89,11 +96,16 @@ hair_sim_msgs::HairState makeHairState(const Simulator& simulator, const std::ve
 }
 
 void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands_per_strip,
-                     const std::string& frame, const ros::Time& stamp,
-                     visualization_msgs::MarkerArray& array) {
-  const std::size_t count = mode == RenderMode::Both ? 2 : 1;
+                     const std::string& frame, const ros::Time& stamp, visualization_msgs::MarkerArray& array,
+                     unsigned deleted) {
+  const bool delete_mesh = (deleted & kDeleteHair) != 0 && mode == RenderMode::Strands;
+  const bool delete_strands = (deleted & kDeleteStrands) != 0 && mode == RenderMode::Mesh;
+  const std::size_t count =
+      (mode == RenderMode::Both ? 2 : 1) + (delete_mesh ? 1 : 0) + (delete_strands ? 1 : 0);
   array.markers.resize(count);
   std::size_t next = 0;
+  if (delete_mesh) deleteShell(array.markers[next++], false, frame, stamp);
+  if (delete_strands) deleteShell(array.markers[next++], true, frame, stamp);
   if (mode != RenderMode::Strands) {
     // One merged TRIANGLE_LIST: every strip, one winding, per-vertex RGBA. rviz 1.14's TriangleListMarker
     // draws it with culling off and, given per-vertex colours, unlit (the normals it derives from the
@@ -148,11 +160,29 @@ void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands
   }
 }
 
+std::uint64_t hairMarkersSizeBound(const HairMeshBuilder& meshes, RenderMode mode, int strands_per_strip) {
+  std::uint64_t points = 0;
+  for (const StripMesh& mesh : meshes.meshes()) {
+    if (mode != RenderMode::Strands) points += 3 * static_cast<std::uint64_t>(mesh.triangleCount());
+    if (mode != RenderMode::Mesh && mesh.n_v > 1)
+      points += 2 * static_cast<std::uint64_t>(std::max(strands_per_strip, 0)) * (mesh.n_v - 1);
+  }
+  return 4096 + (24 + 16) * points;  // (the markers' other fields: a few hundred bytes)
+}
+
 void HairMarkersView::update(const HairMeshBuilder& meshes, RenderMode mode, int strands_per_strip,
-                             const std::string& frame, const ros::Time& stamp) {
+                             const std::string& frame, const ros::Time& stamp, int delete_repeats) {
   meshes_ = &meshes;
-  mesh_ = mode != RenderMode::Strands;
-  strands_ = mode != RenderMode::Mesh;
+  const bool mesh = mode != RenderMode::Strands, strands = mode != RenderMode::Mesh;
+  // mesh_ and strands_ still say what the previous message carried.
+  delete_mesh_left_ = mesh ? 0 : mesh_ ? std::max(1, delete_repeats) : std::max(0, delete_mesh_left_ - 1);
+  delete_strands_left_ = strands    ? 0
+                         : strands_ ? std::max(1, delete_repeats)
+                                    : std::max(0, delete_strands_left_ - 1);
+  if (delete_mesh_left_ > 0) deleteShell(mesh_delete_, false, frame, stamp);
+  if (delete_strands_left_ > 0) deleteShell(strands_delete_, true, frame, stamp);
+  mesh_ = mesh;
+  strands_ = strands;
   mesh_vertices_ = 0;
   if (mesh_) {
     markerShell(mesh_shell_, false, frame, stamp);
@@ -172,6 +202,8 @@ std::uint32_t HairMarkersView::serializedLength() const {
   // A shell serialises its empty points and colours as two lengths; each point is 3 float64, each colour
   // 4 float32.
   std::uint32_t length = 4;  // the markers' count
+  if (delete_mesh_left_ > 0) length += ser::serializationLength(mesh_delete_);
+  if (delete_strands_left_ > 0) length += ser::serializationLength(strands_delete_);
   if (mesh_) length += ser::serializationLength(mesh_shell_) + (24 + 16) * mesh_vertices_;
   if (strands_) {
     length += ser::serializationLength(strands_shell_) +
@@ -224,7 +256,11 @@ inline void writeVertex(const Vec3& p, const Rgba& c, float alpha, std::uint8_t*
 }  // namespace
 
 void HairMarkersView::write(ros::serialization::OStream& stream) const {
-  stream.next(static_cast<std::uint32_t>((mesh_ ? 1 : 0) + (strands_ ? 1 : 0)));
+  stream.next(static_cast<std::uint32_t>((delete_mesh_left_ > 0 ? 1 : 0) +
+                                         (delete_strands_left_ > 0 ? 1 : 0) + (mesh_ ? 1 : 0) +
+                                         (strands_ ? 1 : 0)));
+  if (delete_mesh_left_ > 0) stream.next(mesh_delete_);
+  if (delete_strands_left_ > 0) stream.next(strands_delete_);
   if (mesh_) {
     writeMarker(stream, mesh_shell_, mesh_vertices_, [this](std::uint8_t* points, std::uint8_t* colours) {
       std::vector<std::uint32_t> indices;  // one strip's triangles, built again only for a new grid size

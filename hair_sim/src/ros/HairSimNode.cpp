@@ -15,6 +15,7 @@
 #include <system_error>
 #include <type_traits>
 
+#include "hair_sim/core/geometry/Tessellator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/util/YamlReader.hpp"
 #include "hair_sim/ros/InputChecks.hpp"
@@ -68,7 +69,16 @@ bool readParam(const ros::NodeHandle& nh, const std::string& name, T& value) {
 HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(nh), pnh_(private_nh) {
   readParameters();
   body_held_.assign(config_.bodies.size(), false);
-  rebuild(loadHairstyle(config_.hairstyle_file));
+  Hairstyle style = loadHairstyle(config_.hairstyle_file);
+  // A triangle budget below the coarsest level cannot be met (the core refuses it): name the parameter.
+  std::vector<StripShape> shapes;
+  for (const Strip& s : style.strips) shapes.push_back(StripShape{s.columns, s.rows});
+  min_triangles_ = Tessellator::triangleCount(shapes, Tessellator::ladderLevel(0));
+  if (mesh_options_.max_triangles > 0 && mesh_options_.max_triangles < min_triangles_)
+    throw badParam("max_triangles", std::to_string(mesh_options_.max_triangles),
+                   "is below the coarsest level's " + std::to_string(min_triangles_) +
+                       " triangles (1 x 1) for this hairstyle: at least that, or 0 (off)");
+  rebuild(std::move(style));
   // Before any subscription: in a nodelet manager callbacks may start as soon as they exist.
   diagnostics_ = std::make_unique<HairSimDiagnostics>(
       nh_, pnh_, pnh_.getNamespace(), "hair_sim " + config_.head_frame, config_.physics.substep);
@@ -79,7 +89,7 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(n
                      : render_mode_ == RenderMode::Strands ? "strands"
                                                            : "both";
   live.mesh = mesh_options_;
-  live_ = std::make_unique<LiveParameters>(pnh_, live);
+  live_ = std::make_unique<LiveParameters>(pnh_, live, min_triangles_);
   // A subscriber that connects gets TCP_NODELAY on its connection (~tcp_nodelay), whether it asked or not.
   const ros::SubscriberStatusCallback connected = boost::bind(&HairSimNode::onSubscriberConnect, this);
   markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("hair_markers", 2, connected);
@@ -720,7 +730,10 @@ void HairSimNode::warnThrottled(const std::string& what, const std::string& text
 void HairSimNode::onTimer(const ros::TimerEvent&) {
   guarded("the timer", [&] {
     // A fallback while no tf comes in (the hair still settles and is published at publish_rate).
-    if ((ros::WallTime::now() - last_tf_publish_).toSec() < 1.5 / config_.publish_rate) return;
+    // Not between two tf messages that come in more slowly than publish_rate: the outputs follow the tf
+    // then, and the timer would only send the last one again (same stamp, same hair).
+    const double wait = std::max(1.5 / config_.publish_rate, 2.0 * tf_interval_);
+    if ((ros::WallTime::now() - last_tf_update_).toSec() < wait) return;
     update(false);
   });
 }
@@ -729,6 +742,14 @@ void HairSimNode::update(bool from_tf) {
   const double dt = config_.physics.substep;
   Iso3 latest_pose;
   ros::Time target;
+  if (from_tf) {
+    const ros::WallTime now = ros::WallTime::now();
+    // The longest recent interval, forgotten by 10 % a message: two messages that arrive together (a
+    // busy host) do not make the tf look fast.
+    if (!last_tf_update_.isZero())
+      tf_interval_ = std::max(std::min((now - last_tf_update_).toSec(), max_tf_age_), 0.9 * tf_interval_);
+    last_tf_update_ = now;
+  }
   applyLiveSettings();
   if (!lookupPose(config_.head_frame, ros::Time(0), latest_pose, &target)) {
     diagnostics_->headPoseMissing();
@@ -863,7 +884,6 @@ void HairSimNode::update(bool from_tf) {
   // the same states); the timer publishes whenever it acts.
   const double period = 1.0 / config_.publish_rate;
   if (from_tf && !next_publish_.isZero() && target < next_publish_) return;
-  if (from_tf) last_tf_publish_ = ros::WallTime::now();
   next_publish_ = gridTime(gridIndexAtOrBefore(target, period) + 1, period);
   if (last_body_frames_.size() != config_.bodies.size()) {
     for (std::size_t b = 0; b < config_.bodies.size(); ++b)
@@ -932,7 +952,27 @@ void HairSimNode::publishOutputs(const ros::Time& stamp, const Iso3& pose,
     bodies_scratch_.push_back(config_.bodies[b].shape.transformed(body_frames[b]));
   meshes_->build(world_points_, simulator_->stripOffsets(), simulator_->hairstyle().scalp.transformed(pose),
                  bodies_scratch_);
-  markers_view_.update(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp);
+  // Too large for any subscriber (and gigabytes to build at every output, which stalled the hair): not sent.
+  const std::uint64_t bound = hairMarkersSizeBound(*meshes_, render_mode_, strands_per_strip_);
+  if (bound > kMaxMarkersBytes) {
+    const LevelOfDetail& level = meshes_->levelOfDetail();
+    const char* mode = render_mode_ == RenderMode::Mesh      ? "mesh"
+                       : render_mode_ == RenderMode::Strands ? "strands"
+                                                             : "both";
+    char text[400];
+    std::snprintf(
+        text, sizeof(text),
+        "hair_sim: hair_markers not sent: it would take up to %.2f GB (render_mode %s, "
+        "strands_per_strip %d, level of detail %d x %d), more than the 1 GB a ROS subscriber accepts: "
+        "lower ~strands_per_strip or the level of detail (hair_state goes on)",
+        1e-9 * static_cast<double>(bound), mode, strands_per_strip_, level.samples_across,
+        level.samples_along);
+    warnThrottled("markers size", text, 5.0);
+    return;
+  }
+  // A namespace the new render mode drops is deleted in the messages of the next second (at least 3).
+  markers_view_.update(*meshes_, render_mode_, strands_per_strip_, config_.world_frame, stamp,
+                       std::max(3, static_cast<int>(std::ceil(config_.publish_rate))));
   markers_pub_.publish(markers_view_);
 }
 
@@ -991,6 +1031,9 @@ void HairSimNode::applyLiveSettings() {
       s.mesh.max_triangles != mesh_options_.max_triangles) {
     mesh_options_ = s.mesh;
     makeMeshBuilder();
+    const LevelOfDetail& level = meshes_->levelOfDetail();
+    ROS_INFO("hair_sim: level of detail now %d x %d: %lld triangles", level.samples_across,
+             level.samples_along, static_cast<long long>(meshes_->triangleCount()));
   }
 }
 

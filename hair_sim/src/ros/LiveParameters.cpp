@@ -18,7 +18,9 @@ void requireInRange(const std::string& name, double value, double min, double ma
 
 }  // namespace
 
-LiveParameters::LiveParameters(ros::NodeHandle private_nh, const LiveSettings& initial) : accepted_(initial) {
+LiveParameters::LiveParameters(ros::NodeHandle private_nh, const LiveSettings& initial,
+                               std::int64_t min_triangles)
+    : accepted_(initial), min_triangles_(min_triangles) {
   const HairSimConfig start = toConfig(initial), min = HairSimConfig::__getMin__(),
                       max = HairSimConfig::__getMax__();
   requireInRange("hinge_stiffness", start.hinge_stiffness, min.hinge_stiffness, max.hinge_stiffness);
@@ -37,7 +39,7 @@ LiveParameters::LiveParameters(ros::NodeHandle private_nh, const LiveSettings& i
   requireInRange("samples_across", start.samples_across, min.samples_across, max.samples_across);
   requireInRange("samples_along", start.samples_along, min.samples_along, max.samples_along);
   requireInRange("max_triangles", start.max_triangles, min.max_triangles, max.max_triangles);
-  const std::string problem = check(initial);
+  const std::string problem = check(initial, min_triangles_);
   if (!problem.empty()) throw std::invalid_argument(problem);
   // The server starts from the ~ parameters: make them the initial settings.
   start.__toServer__(private_nh);
@@ -54,7 +56,7 @@ bool LiveParameters::takePending(LiveSettings& out) {
   return true;
 }
 
-std::string LiveParameters::check(const LiveSettings& settings) {
+std::string LiveParameters::check(const LiveSettings& settings, std::int64_t min_triangles) {
   try {
     settings.physics.validate();
   } catch (const std::invalid_argument& e) {
@@ -64,13 +66,17 @@ std::string LiveParameters::check(const LiveSettings& settings) {
     return "render_mode: '" + settings.render_mode + "' must be mesh, strands or both";
   if (!(settings.wind_scale >= 0.0))
     return "wind_scale: " + formatDouble(settings.wind_scale) + " must be >= 0";
+  if (settings.mesh.max_triangles > 0 && settings.mesh.max_triangles < min_triangles)
+    return "max_triangles: " + std::to_string(settings.mesh.max_triangles) +
+           " is below the coarsest level's " + std::to_string(min_triangles) +
+           " triangles (1 x 1) for this hairstyle: at least that, or 0 (off)";
   return "";
 }
 
 void LiveParameters::onReconfigure(HairSimConfig& config, std::uint32_t) {
   std::lock_guard<std::mutex> lock(mutex_);
   const LiveSettings wanted = fromConfig(config, accepted_);
-  const std::string problem = check(wanted);
+  const std::string problem = check(wanted, min_triangles_);
   if (!problem.empty()) {
     // The server publishes what the callback leaves in `config`: the last good settings.
     ROS_WARN("hair_sim: reconfigure rejected (%s); keeping the previous values", problem.c_str());

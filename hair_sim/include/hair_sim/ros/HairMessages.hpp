@@ -38,10 +38,25 @@ void fillHairState(const Simulator& simulator, const std::vector<Vec3>& world_po
 visualization_msgs::MarkerArray makeHairMarkers(const HairMeshBuilder& meshes, RenderMode mode,
                                                 int strands_per_strip, const std::string& frame,
                                                 const ros::Time& stamp);
-/// makeHairMarkers into `array`, reusing its buffers (no allocation once they have grown).
+/// Namespaces of hair_markers that a message deletes (bits): a render mode that drops one (mesh to
+/// strands: the "hair" mesh; both or strands to mesh: the "strands") sends a DELETE for it, ahead of its
+/// markers, so that rviz does not keep showing the last marker of that namespace.
+enum DeletedNamespaces : unsigned { kDeleteNone = 0, kDeleteHair = 1, kDeleteStrands = 2 };
+
+/// makeHairMarkers into `array`, reusing its buffers (no allocation once they have grown); `deleted`
+/// (DeletedNamespaces bits) puts a DELETE marker for each of those namespaces first.
 void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands_per_strip,
-                     const std::string& frame, const ros::Time& stamp,
-                     visualization_msgs::MarkerArray& array);
+                     const std::string& frame, const ros::Time& stamp, visualization_msgs::MarkerArray& array,
+                     unsigned deleted = kDeleteNone);
+
+/// hair_markers' serialised size at most, in bytes, for meshes already built (exact for the mesh; the strands
+/// drop zero-length segments): 40 bytes a point, 2 points a strand segment, 3 a triangle. In 64 bits: large
+/// settings (10,000 strands per strip at 64 samples along) pass 4 GB.
+std::uint64_t hairMarkersSizeBound(const HairMeshBuilder& meshes, RenderMode mode, int strands_per_strip);
+
+/// What a ROS subscriber accepts at most: roscpp drops the connection on a message of over a gigabyte
+/// ("a message of over a gigabyte was predicted in tcpros").
+constexpr std::uint64_t kMaxMarkersBytes = 1000000000;
 
 /// hair_markers written straight from the meshes into roscpp's buffer when published: the bytes of
 /// fillHairMarkers' MarkerArray (HairMessagesTest compares them), in one pass, without filling a MarkerArray
@@ -52,9 +67,15 @@ void fillHairMarkers(const HairMeshBuilder& meshes, RenderMode mode, int strands
 class HairMarkersView {
  public:
   /// Takes the meshes, the mode and the header for the next publish(); the strand lines (Strands, Both)
-  /// are computed here. Reuses its buffers.
+  /// are computed here. Reuses its buffers. A namespace the previous update carried and this mode drops
+  /// gets a DELETE marker in this message and the next `delete_repeats` - 1 ones (a subscriber's queue may
+  /// drop a message), so that rviz removes it.
   void update(const HairMeshBuilder& meshes, RenderMode mode, int strands_per_strip, const std::string& frame,
-              const ros::Time& stamp);
+              const ros::Time& stamp, int delete_repeats = 1);
+  /// DeletedNamespaces bits of the message the last update() prepared.
+  unsigned deleted() const {
+    return (delete_mesh_left_ > 0 ? kDeleteHair : 0u) | (delete_strands_left_ > 0 ? kDeleteStrands : 0u);
+  }
   /// Serialised size in bytes (without roscpp's 4-byte length prefix).
   std::uint32_t serializedLength() const;
   void write(ros::serialization::OStream& stream) const;
@@ -67,7 +88,11 @@ class HairMarkersView {
   visualization_msgs::Marker strands_shell_;  ///< same
   std::vector<Vec3> strand_points_;
   std::vector<Rgba> strand_colours_;
-  std::uint32_t mesh_vertices_ = 0;  ///< 3 per triangle
+  std::uint32_t mesh_vertices_ = 0;            ///< 3 per triangle
+  int delete_mesh_left_ = 0;                   ///< messages that still carry a DELETE of ns "hair"
+  int delete_strands_left_ = 0;                ///< same for ns "strands"
+  visualization_msgs::Marker mesh_delete_;     ///< DELETE of ns "hair"
+  visualization_msgs::Marker strands_delete_;  ///< DELETE of ns "strands"
 };
 
 /// collision_bodies: one SPHERE marker per body at its frame's pose (frames: world poses, the

@@ -116,7 +116,8 @@ class HairSimNode {
   ros::Time last_tf_receipt_;  ///< to clear the buffer when time jumps back, as tf2_ros does
   ros::Time
       next_publish_;  ///< when the next output is due: stamp of the head pose (a multiple of the period)
-  ros::WallTime last_tf_publish_;  ///< last output made on a tf arrival
+  ros::WallTime last_tf_update_;  ///< last update() on a tf arrival
+  double tf_interval_ = 0.0;      ///< recent wall time between two of them (s, at most max_tf_age)
   ros::Subscriber wind_sub_, events_sub_;
   ros::Publisher markers_pub_, bodies_pub_, state_pub_, events_pub_;
   ros::ServiceServer reset_srv_, trigger_srv_;
@@ -148,6 +149,7 @@ class HairSimNode {
 
   std::unique_ptr<Simulator> simulator_;
   std::unique_ptr<HairMeshBuilder> meshes_;
+  std::int64_t min_triangles_ = 0;  ///< the hairstyle's triangles at the coarsest level (1 x 1)
   HeadMotionEstimator head_;
   bool started_ = false;
   /// The substeps lie on a grid fixed in ROS time, sim_time_ = gridTime(sim_step_) = sim_step_ * substep, so

@@ -32,14 +32,16 @@ class LiveParameters {
   /// ~parameter_updates) with `initial`: the ~ parameters of the tunable names are set to it first, so a
   /// start always begins from the config file, not from values a previous run left on the master.
   /// Throws std::invalid_argument naming the parameter when `initial` is outside a range of the cfg.
-  LiveParameters(ros::NodeHandle private_nh, const LiveSettings& initial);
+  /// `min_triangles`: the hairstyle's triangle count at the coarsest level of detail; a max_triangles
+  /// below it (but 0, off) is refused.
+  LiveParameters(ros::NodeHandle private_nh, const LiveSettings& initial, std::int64_t min_triangles = 0);
 
   /// True, with the settings, when they changed since the last call (thread-safe).
   bool takePending(LiveSettings& out);
 
   /// Checks a set: the physics through PhysicsParameters::validate, the render mode by name. Returns an
   /// empty string when good, else what is wrong (parameter and value).
-  static std::string check(const LiveSettings& settings);
+  static std::string check(const LiveSettings& settings, std::int64_t min_triangles = 0);
 
  private:
   void onReconfigure(HairSimConfig& config, std::uint32_t level);
@@ -49,6 +51,7 @@ class LiveParameters {
   std::mutex mutex_;
   LiveSettings accepted_;  ///< the last valid settings (guarded by mutex_)
   bool pending_ = false;   ///< accepted_ not yet taken by the node
+  std::int64_t min_triangles_ = 0;
   boost::recursive_mutex server_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<HairSimConfig>> server_;
 };
