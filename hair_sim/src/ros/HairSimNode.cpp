@@ -15,7 +15,6 @@
 #include <system_error>
 #include <type_traits>
 
-#include "hair_sim/core/geometry/Tessellator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/util/YamlReader.hpp"
 #include "hair_sim/ros/InputChecks.hpp"
@@ -71,9 +70,7 @@ HairSimNode::HairSimNode(ros::NodeHandle nh, ros::NodeHandle private_nh) : nh_(n
   body_held_.assign(config_.bodies.size(), false);
   Hairstyle style = loadHairstyle(config_.hairstyle_file);
   // A triangle budget below the coarsest level cannot be met (the core refuses it): name the parameter.
-  std::vector<StripShape> shapes;
-  for (const Strip& s : style.strips) shapes.push_back(StripShape{s.columns, s.rows});
-  min_triangles_ = Tessellator::triangleCount(shapes, Tessellator::ladderLevel(0));
+  min_triangles_ = HairMeshBuilder::minimumTriangles(style);
   if (mesh_options_.max_triangles > 0 && mesh_options_.max_triangles < min_triangles_)
     throw badParam("max_triangles", std::to_string(mesh_options_.max_triangles),
                    "is below the coarsest level's " + std::to_string(min_triangles_) +

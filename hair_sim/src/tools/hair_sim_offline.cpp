@@ -20,7 +20,6 @@
 #include <cstdlib>
 
 #include "hair_sim/core/geometry/PlyWriter.hpp"
-#include "hair_sim/core/geometry/Tessellator.hpp"
 #include "hair_sim/core/model/HairstyleIO.hpp"
 #include "hair_sim/core/util/YamlReader.hpp"
 #include "hair_sim/ros/BagWriter.hpp"
@@ -307,10 +306,7 @@ int main(int argc, char** argv) {
                               "' and world_frame '" + config.world_frame + "'");
     }
     if (options.mesh.max_triangles > 0) {
-      std::vector<hair_sim::StripShape> shapes;
-      for (const hair_sim::Strip& s : style.strips) shapes.push_back(hair_sim::StripShape{s.columns, s.rows});
-      const std::int64_t minimum =
-          hair_sim::Tessellator::triangleCount(shapes, hair_sim::Tessellator::ladderLevel(0));
+      const std::int64_t minimum = hair_sim::HairMeshBuilder::minimumTriangles(style);
       if (options.mesh.max_triangles < minimum)
         return usageError("--max-triangles: " + max_triangles + " is below the " + std::to_string(minimum) +
                           " triangles of the coarsest level of detail (1 x 1 samples per span) of " +

@@ -89,11 +89,20 @@ bool boundingBox(const double* xyz, std::size_t count, double lo[3], double hi[3
 
 LevelOfDetail chooseLevel(const Hairstyle& style, const HairMeshOptions& o) {
   if (o.max_triangles <= 0) return o.level_of_detail;
-  std::vector<StripShape> shapes;
-  for (const Strip& s : style.strips) shapes.push_back(StripShape{s.columns, s.rows});
-  return Tessellator::selectLevelOfDetail(shapes, o.max_triangles);
+  return Tessellator::selectLevelOfDetail(HairMeshBuilder::stripShapes(style), o.max_triangles);
 }
 }  // namespace
+
+std::vector<StripShape> HairMeshBuilder::stripShapes(const Hairstyle& hairstyle) {
+  std::vector<StripShape> shapes;
+  shapes.reserve(hairstyle.strips.size());
+  for (const Strip& s : hairstyle.strips) shapes.push_back(StripShape{s.columns, s.rows});
+  return shapes;
+}
+
+std::int64_t HairMeshBuilder::minimumTriangles(const Hairstyle& hairstyle) {
+  return Tessellator::triangleCount(stripShapes(hairstyle), Tessellator::ladderLevel(0));
+}
 
 HairMeshBuilder::HairMeshBuilder(const Hairstyle& hairstyle, const HairMeshOptions& options)
     : hairstyle_(hairstyle), level_of_detail_(chooseLevel(hairstyle, options)), look_(options.look) {

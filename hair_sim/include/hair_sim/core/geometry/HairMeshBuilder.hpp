@@ -25,6 +25,10 @@ class HairMeshBuilder {
  public:
   /// Throws std::invalid_argument on bad options (e.g. a budget below the coarsest level).
   HairMeshBuilder(const Hairstyle& hairstyle, const HairMeshOptions& options);
+  /// The strips' grids, as the tessellator's level-of-detail functions take them.
+  static std::vector<StripShape> stripShapes(const Hairstyle& hairstyle);
+  /// The triangles of the coarsest level (1 x 1 samples per span): the least a max_triangles budget can be.
+  static std::int64_t minimumTriangles(const Hairstyle& hairstyle);
   ~HairMeshBuilder();
 
   /// Threads that build() uses (1 = the calling thread alone, the default): the strips go in blocks of
