@@ -54,6 +54,19 @@ std_msgs::ColorRGBA toColor(const Rgba& c) {
 
 }  // namespace
 
+const char* renderModeName(RenderMode mode) {
+  return mode == RenderMode::Mesh ? "mesh" : mode == RenderMode::Strands ? "strands" : "both";
+}
+
+bool parseRenderMode(const std::string& name, RenderMode* mode) {
+  for (const RenderMode m : {RenderMode::Mesh, RenderMode::Strands, RenderMode::Both})
+    if (name == renderModeName(m)) {
+      *mode = m;
+      return true;
+    }
+  return false;
+}
+
 geometry_msgs::Point toPoint(const Vec3& p) {
   geometry_msgs::Point q;
   q.x = p.x();

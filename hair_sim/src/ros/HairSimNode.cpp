@@ -158,13 +158,7 @@ void HairSimNode::readParameters() {
   }
   std::string mode = "mesh";
   readParam(pnh_, "render_mode", mode);
-  if (mode == "mesh")
-    render_mode_ = RenderMode::Mesh;
-  else if (mode == "strands")
-    render_mode_ = RenderMode::Strands;
-  else if (mode == "both")
-    render_mode_ = RenderMode::Both;
-  else
+  if (!parseRenderMode(mode, &render_mode_))
     throw badParam("render_mode", mode, "must be mesh, strands or both");
   int across = 2, along = 4, max_triangles = 0;
   readParam(pnh_, "samples_across", across);
@@ -953,17 +947,14 @@ void HairSimNode::publishOutputs(const ros::Time& stamp, const Iso3& pose,
   const std::uint64_t bound = hairMarkersSizeBound(*meshes_, render_mode_, strands_per_strip_);
   if (bound > kMaxMarkersBytes) {
     const LevelOfDetail& level = meshes_->levelOfDetail();
-    const char* mode = render_mode_ == RenderMode::Mesh      ? "mesh"
-                       : render_mode_ == RenderMode::Strands ? "strands"
-                                                             : "both";
     char text[400];
     std::snprintf(
         text, sizeof(text),
         "hair_sim: hair_markers not sent: it would take up to %.2f GB (render_mode %s, "
         "strands_per_strip %d, level of detail %d x %d), more than the 1 GB a ROS subscriber accepts: "
         "lower ~strands_per_strip or the level of detail (hair_state goes on)",
-        1e-9 * static_cast<double>(bound), mode, strands_per_strip_, level.samples_across,
-        level.samples_along);
+        1e-9 * static_cast<double>(bound), renderModeName(render_mode_), strands_per_strip_,
+        level.samples_across, level.samples_along);
     warnThrottled("markers size", text, 5.0);
     return;
   }
@@ -1020,9 +1011,7 @@ void HairSimNode::applyLiveSettings() {
   }
   config_.physics = s.physics;  // a later reset KEEP_SHAPE rebuilds with them
   wind_scale_ = s.wind_scale;
-  render_mode_ = s.render_mode == "strands" ? RenderMode::Strands
-                 : s.render_mode == "both"  ? RenderMode::Both
-                                            : RenderMode::Mesh;
+  parseRenderMode(s.render_mode, &render_mode_);  // (LiveParameters checked the name)
   if (s.mesh.level_of_detail.samples_across != mesh_options_.level_of_detail.samples_across ||
       s.mesh.level_of_detail.samples_along != mesh_options_.level_of_detail.samples_along ||
       s.mesh.max_triangles != mesh_options_.max_triangles) {

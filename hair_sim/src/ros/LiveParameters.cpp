@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "hair_sim/core/util/YamlReader.hpp"
+#include "hair_sim/ros/HairMessages.hpp"
 
 namespace hair_sim {
 
@@ -62,7 +63,8 @@ std::string LiveParameters::check(const LiveSettings& settings, std::int64_t min
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
-  if (settings.render_mode != "mesh" && settings.render_mode != "strands" && settings.render_mode != "both")
+  RenderMode mode;
+  if (!parseRenderMode(settings.render_mode, &mode))
     return "render_mode: '" + settings.render_mode + "' must be mesh, strands or both";
   if (!(settings.wind_scale >= 0.0))
     return "wind_scale: " + formatDouble(settings.wind_scale) + " must be >= 0";

@@ -21,6 +21,9 @@ namespace hair_sim {
 
 /// What hair_markers carries: the tessellated strips, strand lines, or both.
 enum class RenderMode { Mesh, Strands, Both };
+/// The parameter's names: "mesh", "strands", "both". parseRenderMode is false for any other name.
+const char* renderModeName(RenderMode mode);
+bool parseRenderMode(const std::string& name, RenderMode* mode);
 
 geometry_msgs::Point toPoint(const Vec3& p);
 
