@@ -375,8 +375,7 @@ void HairSimNode::onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg) {
     }
     EventType type;
     if (parseEventType(msg->type, &type) && isHeadMotion(type)) {  // the head driver's
-      // This node's own subscription to the topic counts as one: with no other, nothing takes it.
-      if (events_pub_.getNumSubscribers() < 2)
+      if (!headDriverSubscribed())
         warnThrottled("event", "hair_sim: a " + msg->type + " HairEvent on " + events_sub_.getTopic() +
                                    ": no head driver subscribes to it: nothing will move the head");
       return;
@@ -387,45 +386,40 @@ void HairSimNode::onEvent(const hair_sim_msgs::HairEvent::ConstPtr& msg) {
 
 bool HairSimNode::onTrigger(hair_sim_msgs::Trigger::Request& request,
                             hair_sim_msgs::Trigger::Response& response) {
-  EventType type;
-  if (parseEventType(request.event.type, &type) && isHeadMotion(type)) {
+  // Accepted (scheduled here, or passed on to the head driver), else the reason.
+  auto take = [&](std::string* message) {
+    EventType type;
+    if (!(parseEventType(request.event.type, &type) && isHeadMotion(type)))
+      return schedule(request.event, message);
     // Checked here so that the caller hears about a bad value; the head driver schedules it.
     Event event;
-    std::string problem;
     const ros::Time start =
         request.event.header.stamp.isZero() ? ros::Time::now() : request.event.header.stamp;
-    if (!eventFromMsg(request.event, Vec3::Zero(), start.toSec(), &event, &problem)) {
-      response.accepted = false;
-      response.message = problem;
-      warnThrottled("event",
-                    "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + problem);
-      return true;
-    }
-    // This node's own subscription to the topic counts as one: with no other, no head driver would get it.
-    if (events_pub_.getNumSubscribers() < 2) {
-      response.accepted = false;
-      response.message = "no head driver subscribes to " + events_pub_.getTopic() +
-                         ": nothing would move the head (" + request.event.type +
-                         " is a head motion; start head_driver, or move the head frame in tf)";
-      warnThrottled(
-          "event", "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + response.message);
-      return true;
+    if (!eventFromMsg(request.event, Vec3::Zero(), start.toSec(), &event, message)) return false;
+    if (!headDriverSubscribed()) {
+      *message = "no head driver subscribes to " + events_pub_.getTopic() +
+                 ": nothing would move the head (" + request.event.type +
+                 " is a head motion; start head_driver, or move the head frame in tf)";
+      return false;
     }
     hair_sim_msgs::HairEvent forward = request.event;
     forward.header.stamp = start;
     events_pub_.publish(forward);
-    response.accepted = true;
-    response.message = "passed on to the head driver on " + events_pub_.getTopic() +
-                       " (starts at t = " + formatDouble(start.toSec()) + " s)";
+    *message = "passed on to the head driver on " + events_pub_.getTopic() +
+               " (starts at t = " + formatDouble(start.toSec()) + " s)";
     return true;
-  }
-  response.accepted = schedule(request.event, &response.message);
+  };
+  response.accepted = take(&response.message);
   if (response.accepted)
     ROS_INFO("hair_sim: trigger: %s", response.message.c_str());
   else
     warnThrottled("event",
                   "hair_sim: trigger refused a HairEvent (" + request.event.type + "): " + response.message);
   return true;
+}
+
+bool HairSimNode::headDriverSubscribed() const {
+  return events_pub_.getNumSubscribers() >= 2;  // this node's own subscription to the topic counts as one
 }
 
 bool HairSimNode::onReset(hair_sim_msgs::Reset::Request& request, hair_sim_msgs::Reset::Response& response) {

@@ -73,6 +73,8 @@ class HairSimNode {
   /// the buffer again just before it, so that the jump falls within one substep (a teleport of the head, or
   /// a body that jumps) instead of a sweep that tf would interpolate between the two messages. Said for any
   /// frame but the head's own (whose teleport the step reports).
+  /// Whether a node besides this one (a head driver) subscribes to events, which head motions go to.
+  bool headDriverSubscribed() const;
   void holdBeforeJump(const geometry_msgs::TransformStamped& t, const std::string& authority);
   /// Records `parent` as `child`'s parent frame (parent_frame_); when that is news, hair_frames_,
   /// above_head_ and bodies_below_ again.
